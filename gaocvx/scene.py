@@ -1,0 +1,463 @@
+"""Scenes: a validated, immutable description of one beam problem.
+
+A scene holds the beam, its supports, its loads and what it may touch
+(a deformable unilateral foundation or a rigid obstacle), the mesh size and
+the solver options.  It is read from a TOML file (:func:`load_scene`), from a
+dict with the same structure (:meth:`Scene.from_dict`), or built from the
+dataclasses directly; every path goes through the same validation, and every
+bad value raises :class:`~gaocvx.errors.SceneError` naming its dotted key.
+
+Sign conventions (SI units): deflection ``w`` is positive **up**, distributed
+loads and point forces are positive up, the axial force ``P`` is positive in
+**compression**, and a foundation or obstacle is given by its ``gap`` >= 0
+below the undeformed beam (its surface is at level ``g = -gap``).
+
+Examples
+--------
+>>> scene = Scene.from_dict({
+...     "beam": {"model": "euler-bernoulli", "supports": "P4", "length": 1.0,
+...              "E": 2.1e11, "half_thickness": 0.1, "width": 1.0},
+...     "load": {"q": -5e7}})
+>>> scene.beam.EI_eff
+140000000.00000003
+>>> scene.with_overrides({"load.axial": 1e8}).load.axial
+100000000.0
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+from .errors import SceneError
+
+__all__ = [
+    "Beam", "Load", "Foundation", "Obstacle", "MeshSpec", "SolveOptions", "Scene",
+    "load_scene", "parse_set", "MODELS", "SUPPORTS", "METHODS",
+]
+
+MODELS = ("gao", "euler-bernoulli")
+SUPPORTS = ("P1", "P2", "P3", "P4")
+METHODS = ("auto", "convex", "newton")
+SOLVERS = ("clarabel", "osqp")
+MAX_ELEMENTS = 1_000_000
+
+# Effective-length factors L_ef / L of the continuum buckling loads (physics.md).
+EFFECTIVE_LENGTH = {"P1": 0.5, "P2": 0.699157, "P3": 2.0, "P4": 1.0}
+
+
+# --------------------------------------------------------------------------- checks
+def _number(key: str, value, *, lo=None, hi=None, lo_open=False, hi_open=False) -> float:
+    """Return ``value`` as a finite float, or raise SceneError naming ``key``."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise SceneError(key, "must be a number", value)
+    value = float(value)
+    if not math.isfinite(value):
+        raise SceneError(key, "must be finite", value)
+    if lo is not None and (value <= lo if lo_open else value < lo):
+        raise SceneError(key, f"must be {'>' if lo_open else '>='} {lo:g}", value)
+    if hi is not None and (value >= hi if hi_open else value > hi):
+        raise SceneError(key, f"must be {'<' if hi_open else '<='} {hi:g}", value)
+    return value
+
+
+def _choice(key: str, value, options) -> str:
+    if not isinstance(value, str) or value not in options:
+        listed = ", ".join(repr(o) for o in options)
+        raise SceneError(key, f"must be one of {listed}", value)
+    return value
+
+
+def _table(key: str, value) -> Mapping:
+    if not isinstance(value, Mapping):
+        raise SceneError(key, "must be a table", value)
+    return value
+
+
+def _pairs(key: str, value) -> list:
+    if not isinstance(value, (list, tuple)):
+        raise SceneError(key, "must be a list of [x, value] pairs", value)
+    out = []
+    for i, pair in enumerate(value):
+        if not isinstance(pair, (list, tuple)) or len(pair) != 2:
+            raise SceneError(f"{key}[{i}]", "must be a pair [x, value]", pair)
+        out.append((_number(f"{key}[{i}][0]", pair[0]), _number(f"{key}[{i}][1]", pair[1])))
+    return out
+
+
+def _reject_unknown(section: str, data: Mapping, known) -> None:
+    for name in data:
+        if name not in known:
+            where = f"{section}.{name}" if section else str(name)
+            listed = ", ".join(known)
+            raise SceneError(where, f"unknown key (known: {listed})", data[name])
+
+
+# --------------------------------------------------------------------------- parts
+@dataclass(frozen=True)
+class Beam:
+    """The beam: model, supports, geometry and material.
+
+    Parameters
+    ----------
+    model : {"gao", "euler-bernoulli"}
+        The Gao beam or its special case alpha = 0, nu = 0.
+    supports : {"P1", "P2", "P3", "P4"}
+        Clamped-clamped, clamped-pinned, cantilever (free right end),
+        pinned-pinned.
+    length, E, nu, half_thickness, width : float
+        L [m], Young's modulus [Pa], Poisson's ratio, h [m] (the section is
+        2h thick), b [m].
+    EI, E_alpha, mu : float or None
+        Explicit overrides of the derived coefficients.
+    """
+
+    supports: str
+    length: float
+    E: float | None = None
+    nu: float | None = None
+    half_thickness: float | None = None
+    width: float | None = None
+    model: str = "gao"
+    EI: float | None = None
+    E_alpha: float | None = None
+    mu: float | None = None
+
+    KEYS = ("model", "supports", "length", "E", "nu", "half_thickness", "width",
+            "EI", "E_alpha", "mu")
+
+    def __post_init__(self):
+        s = "beam"
+        _choice(f"{s}.model", self.model, MODELS)
+        _choice(f"{s}.supports", self.supports, SUPPORTS)
+        set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731 (frozen dataclass)
+        set_("length", _number(f"{s}.length", self.length, lo=0, lo_open=True))
+        for name in ("E", "half_thickness", "width", "EI"):
+            value = getattr(self, name)
+            if value is not None:
+                set_(name, _number(f"{s}.{name}", value, lo=0, lo_open=True))
+        if self.nu is not None:
+            set_("nu", _number(f"{s}.nu", self.nu, lo=0, hi=0.5, hi_open=True))
+        if self.mu is not None:
+            set_("mu", _number(f"{s}.mu", self.mu, lo=0, lo_open=True))
+        if self.E_alpha is not None:
+            if self.model == "euler-bernoulli":
+                raise SceneError(f"{s}.E_alpha", "is not used by the euler-bernoulli model "
+                                 "(alpha = 0); remove it or use model = \"gao\"", self.E_alpha)
+            set_("E_alpha", _number(f"{s}.E_alpha", self.E_alpha, lo=0))
+        # Every derived coefficient must be computable: name what is missing.
+        section = ("E", "half_thickness", "width")
+        if self.EI is None:
+            self._require(section, "to compute EI (or give beam.EI)")
+        if self.model == "gao":
+            self._require(("nu",), "for the gao model")
+            if self.E_alpha is None:
+                self._require(section, "to compute E_alpha (or give beam.E_alpha)")
+
+    def _require(self, names, why):
+        for name in names:
+            if getattr(self, name) is None:
+                raise SceneError(f"beam.{name}", f"missing: needed {why}")
+
+    @property
+    def is_gao(self) -> bool:
+        return self.model == "gao"
+
+    @property
+    def EI_eff(self) -> float:
+        """Bending stiffness EI = E (2/3) h^3 b, or the override."""
+        if self.EI is not None:
+            return self.EI
+        return self.E * (2.0 / 3.0) * self.half_thickness**3 * self.width
+
+    @property
+    def E_alpha_eff(self) -> float:
+        """E alpha = 3 E h b (1 - nu^2) for Gao, 0 for Euler-Bernoulli."""
+        if not self.is_gao:
+            return 0.0
+        if self.E_alpha is not None:
+            return self.E_alpha
+        return self.E * 3.0 * self.half_thickness * self.width * (1.0 - self.nu**2)
+
+    @property
+    def mu_eff(self) -> float:
+        """mu = (1 + nu)(1 - nu^2) for Gao, 1 for Euler-Bernoulli, or the override."""
+        if self.mu is not None:
+            return self.mu
+        return (1.0 + self.nu) * (1.0 - self.nu**2) if self.is_gao else 1.0
+
+    @property
+    def load_factor(self) -> float:
+        """The factor (1 - nu^2) that scales loads and foundation stiffness (1 for EB)."""
+        return 1.0 - self.nu**2 if self.is_gao else 1.0
+
+    def P_bar(self) -> float:
+        """Continuum convexity limit P_bar = pi^2 EI / (L_ef^2 mu) [N]."""
+        l_ef = EFFECTIVE_LENGTH[self.supports] * self.length
+        return math.pi**2 * self.EI_eff / l_ef**2 / self.mu_eff
+
+
+@dataclass(frozen=True)
+class Load:
+    """Vertical loads and the axial force.
+
+    Parameters
+    ----------
+    q : float, sequence of (x, q) pairs, or None
+        Uniform load [N/m], or a piecewise-linear table with strictly
+        increasing x in [0, L] (zero outside the table's range).
+    points : sequence of (x, F)
+        Point forces [N] at x in [0, L].
+    axial : float
+        Axial force P [N], compression positive.
+    """
+
+    q: float | tuple | None = None
+    points: tuple = ()
+    axial: float = 0.0
+
+    KEYS = ("q", "points", "axial")
+
+    def __post_init__(self):
+        set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731
+        if self.q is not None:
+            if isinstance(self.q, (list, tuple)):
+                table = _pairs("load.q", self.q)
+                if len(table) < 2:
+                    raise SceneError("load.q", "a table needs at least two [x, q] rows", self.q)
+                for i in range(1, len(table)):
+                    if not table[i][0] > table[i - 1][0]:
+                        raise SceneError(f"load.q[{i}][0]", "table x must be strictly increasing",
+                                         table[i][0])
+                set_("q", tuple(table))
+            else:
+                set_("q", _number("load.q", self.q))
+        set_("points", tuple(_pairs("load.points", self.points)))
+        set_("axial", _number("load.axial", self.axial))
+
+    @property
+    def is_table(self) -> bool:
+        return isinstance(self.q, tuple)
+
+
+@dataclass(frozen=True)
+class Foundation:
+    """Deformable unilateral Winkler foundation: gap [m] >= 0, stiffness k_F [N/m^2] > 0."""
+
+    gap: float
+    stiffness: float
+    KEYS = ("gap", "stiffness")
+
+    def __post_init__(self):
+        object.__setattr__(self, "gap", _number("foundation.gap", self.gap, lo=0))
+        object.__setattr__(self, "stiffness",
+                           _number("foundation.stiffness", self.stiffness, lo=0, lo_open=True))
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """Rigid obstacle (Signorini contact): gap [m] >= 0 below the undeformed beam."""
+
+    gap: float
+    KEYS = ("gap",)
+
+    def __post_init__(self):
+        object.__setattr__(self, "gap", _number("obstacle.gap", self.gap, lo=0))
+
+
+@dataclass(frozen=True)
+class MeshSpec:
+    """Number of equal elements (nodes are added at point-force positions)."""
+
+    elements: int = 32
+    KEYS = ("elements",)
+
+    def __post_init__(self):
+        e = self.elements
+        if isinstance(e, float) and e.is_integer():
+            e = int(e)
+        if isinstance(e, bool) or not isinstance(e, int):
+            raise SceneError("mesh.elements", "must be a whole number", self.elements)
+        if not 1 <= e <= MAX_ELEMENTS:
+            raise SceneError("mesh.elements", f"must be between 1 and {MAX_ELEMENTS}", e)
+        object.__setattr__(self, "elements", e)
+
+
+@dataclass(frozen=True)
+class SolveOptions:
+    """Solver options: ``method`` and, for the convex method, ``solver``."""
+
+    method: str = "auto"
+    solver: str = "clarabel"
+    KEYS = ("method", "solver")
+
+    def __post_init__(self):
+        _choice("solve.method", self.method, METHODS)
+        _choice("solve.solver", self.solver, SOLVERS)
+
+
+_PARTS = {"beam": Beam, "load": Load, "foundation": Foundation, "obstacle": Obstacle,
+          "mesh": MeshSpec, "solve": SolveOptions}
+
+
+@dataclass(frozen=True)
+class Scene:
+    """One validated beam problem.  See the module docstring."""
+
+    beam: Beam
+    load: Load = field(default_factory=Load)
+    foundation: Foundation | None = None
+    obstacle: Obstacle | None = None
+    mesh: MeshSpec = field(default_factory=MeshSpec)
+    solve: SolveOptions = field(default_factory=SolveOptions)
+
+    def __post_init__(self):
+        if self.foundation is not None and self.obstacle is not None:
+            raise SceneError("obstacle", "a scene has either a foundation or an obstacle, "
+                             "not both", "both given")
+        L = self.beam.length
+        if self.load.is_table:
+            for i, (x, _) in enumerate(self.load.q):
+                if not 0.0 <= x <= L:
+                    raise SceneError(f"load.q[{i}][0]", f"x must lie on the beam [0, {L:g}]", x)
+        for i, (x, _) in enumerate(self.load.points):
+            if not 0.0 <= x <= L:
+                raise SceneError(f"load.points[{i}][0]", f"x must lie on the beam [0, {L:g}]", x)
+
+    # ----------------------------------------------------------------- properties
+    @property
+    def contact(self) -> str | None:
+        """``"foundation"``, ``"obstacle"`` or ``None``."""
+        if self.foundation is not None:
+            return "foundation"
+        if self.obstacle is not None:
+            return "obstacle"
+        return None
+
+    @property
+    def gap(self) -> float | None:
+        part = self.foundation or self.obstacle
+        return None if part is None else part.gap
+
+    # ----------------------------------------------------------------- conversion
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Scene":
+        """Build a scene from a dict with the structure of a scene file.
+
+        Raises
+        ------
+        SceneError
+            For any unknown key, missing key, wrong type or value out of range.
+        """
+        _table("scene", data)
+        _reject_unknown("", data, tuple(_PARTS))
+        if "beam" not in data:
+            raise SceneError("beam", "missing: every scene needs a [beam] table")
+        parts = {}
+        for name, kind in _PARTS.items():
+            if name not in data:
+                continue
+            section = _table(name, data[name])
+            _reject_unknown(name, section, kind.KEYS)
+            try:
+                parts[name] = kind(**dict(section))
+            except TypeError as exc:  # a required field is missing
+                missing = [f.name for f in dataclasses.fields(kind)
+                           if f.default is dataclasses.MISSING and f.name not in section]
+                raise SceneError(f"{name}.{missing[0]}" if missing else name,
+                                 "missing") from exc
+        return cls(**parts)
+
+    def to_dict(self) -> dict:
+        """The scene as a dict that :meth:`from_dict` reads back (None values dropped)."""
+        out = {}
+        for name in _PARTS:
+            part = getattr(self, name)
+            if part is None:
+                continue
+            values = {}
+            for f in dataclasses.fields(part):
+                v = getattr(part, f.name)
+                if v is None:
+                    continue
+                if isinstance(v, tuple):
+                    v = [list(p) for p in v]
+                values[f.name] = v
+            out[name] = values
+        return out
+
+    def with_overrides(self, overrides: Mapping[str, Any]) -> "Scene":
+        """A new scene with dotted-path values replaced, e.g. ``{"beam.nu": 0.25}``.
+
+        Setting a key of a table the scene does not have creates that table
+        (validation then asks for its other required keys).
+        """
+        data = copy.deepcopy(self.to_dict())
+        for path, value in overrides.items():
+            _assign(data, path, value)
+        return Scene.from_dict(data)
+
+
+def _assign(data: dict, path: str, value) -> None:
+    parts = path.split(".")
+    if len(parts) != 2 or not all(parts):
+        raise SceneError(path, "must be a dotted key section.name, e.g. beam.nu", path)
+    section, key = parts
+    if section not in _PARTS:
+        raise SceneError(path, f"unknown table {section!r} (known: {', '.join(_PARTS)})", path)
+    data.setdefault(section, {})[key] = value
+
+
+def parse_set(text: str) -> tuple[str, Any]:
+    """Parse a ``--set KEY=VALUE`` argument; VALUE uses TOML value syntax.
+
+    A bare word that is not a TOML value (``beam.model=gao``) is taken as a
+    string.
+
+    Examples
+    --------
+    >>> parse_set("foundation.stiffness=5e12")
+    ('foundation.stiffness', 5000000000000.0)
+    >>> parse_set("beam.supports=P3")
+    ('beam.supports', 'P3')
+    """
+    if "=" not in text:
+        raise SceneError("--set", "must be KEY=VALUE", text)
+    key, raw = (s.strip() for s in text.split("=", 1))
+    if not key:
+        raise SceneError("--set", "must be KEY=VALUE", text)
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        if raw and all(c.isalnum() or c in "-_." for c in raw):
+            value = raw
+        else:
+            raise SceneError(key, "is not a TOML value", raw) from None
+    return key, value
+
+
+def load_scene(path, overrides: Mapping[str, Any] | None = None) -> Scene:
+    """Read and validate a TOML scene file, applying dotted-key overrides.
+
+    Raises
+    ------
+    SceneError
+        If the file cannot be read or parsed, or any value is invalid.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise SceneError(str(path), f"cannot read the scene file: {exc.strerror}", str(path)) from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(str(path), f"not valid TOML: {exc}") from None
+    for key, value in (overrides or {}).items():
+        _assign(data, key, value)
+    return Scene.from_dict(data)

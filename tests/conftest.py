@@ -1,0 +1,38 @@
+import copy
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+HERE = Path(__file__).parent
+sys.path.insert(0, str(HERE))  # for tests/exact.py
+
+# A copy of the thesis's published tables (reference-cases.md), shipped with the package.
+THESIS = json.loads((HERE.parent / "gaocvx" / "data" / "thesis_cases.json").read_text())
+
+# The thesis's beam (reference-cases.md): L = 1, h = 0.1, b = 1, nu = 0.3, E = 2.1e11.
+THESIS_BEAM = {"length": 1.0, "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1, "width": 1.0}
+EI_THESIS = 2.1e11 * (2.0 / 3.0) * 0.1**3 * 1.0
+
+
+def scene_dict(supports="P1", model="gao", q=-5e7, points=(), axial=0.0, foundation=None,
+               obstacle=None, elements=32, **beam):
+    """A scene dict on the thesis's beam."""
+    d = {
+        "beam": {"model": model, "supports": supports, **THESIS_BEAM, **beam},
+        "load": {"axial": axial, "points": [list(p) for p in points]},
+        "mesh": {"elements": elements},
+    }
+    if q is not None:
+        d["load"]["q"] = q
+    if foundation is not None:
+        d["foundation"] = dict(zip(("gap", "stiffness"), foundation))
+    if obstacle is not None:
+        d["obstacle"] = {"gap": obstacle}
+    return d
+
+
+@pytest.fixture
+def thesis_scene():
+    return copy.deepcopy(scene_dict())
