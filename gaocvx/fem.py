@@ -1,0 +1,225 @@
+"""Hermite cubic finite elements on a 1-D mesh.
+
+Degrees of freedom are ordered ``[w_0, theta_0, w_1, theta_1, ...]`` with
+``theta_i = w'(x_i)``.  Everything here is pure geometry and polynomials: no
+material data and no units (callers pass non-dimensional meshes and scale the
+matrices themselves).
+
+The element matrices follow physics.md: the bending matrix (3.27) with unit
+stiffness, the geometric matrix (3.40), and loads integrated exactly for
+piecewise-linear load tables.
+
+Examples
+--------
+>>> import numpy as np
+>>> x = np.linspace(0.0, 1.0, 5)
+>>> K = stiffness_matrix(x)
+>>> K.shape
+(10, 10)
+>>> bool(abs(K - K.T).max() < 1e-12)
+True
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+__all__ = [
+    "uniform_nodes_with_points", "stiffness_matrix", "geometric_matrix", "load_vector",
+    "point_load_vector", "eval_matrix", "gauss_points", "shape_functions", "element_of",
+    "free_dofs",
+]
+
+# Essential conditions per support: which of (w0, theta0, wL, thetaL) are fixed.
+_FIXED = {
+    "P1": (True, True, True, True),
+    "P2": (True, True, True, False),
+    "P3": (True, True, False, False),
+    "P4": (True, False, True, False),
+}
+
+
+def free_dofs(n_nodes: int, supports: str) -> np.ndarray:
+    """Indices of the free degrees of freedom for the given supports."""
+    w0, t0, wl, tl = _FIXED[supports]
+    last = 2 * (n_nodes - 1)
+    fixed = [d for d, f in zip((0, 1, last, last + 1), (w0, t0, wl, tl)) if f]
+    mask = np.ones(2 * n_nodes, dtype=bool)
+    mask[fixed] = False
+    return np.flatnonzero(mask)
+
+
+def uniform_nodes_with_points(length: float, elements: int, points=()) -> np.ndarray:
+    """Equal elements on [0, length], with a node at every point-force position.
+
+    A force that lies within a quarter element of an interior node moves that
+    node onto it (so the mesh keeps its number of elements and no element gets
+    short); otherwise a node is inserted.
+
+    Examples
+    --------
+    >>> uniform_nodes_with_points(1.0, 4, [0.3]).tolist()
+    [0.0, 0.3, 0.5, 0.75, 1.0]
+    >>> uniform_nodes_with_points(1.0, 4, [0.4]).tolist()
+    [0.0, 0.25, 0.4, 0.5, 0.75, 1.0]
+    """
+    h = length / elements
+    nodes = list(np.linspace(0.0, length, elements + 1))
+    claimed: set[float] = set()  # node positions already holding a force
+    snap = 1e-12 * length
+    for xp in sorted(set(float(p) for p in points)):
+        i = int(np.argmin(np.abs(np.asarray(nodes) - xp)))
+        d = abs(nodes[i] - xp)
+        interior = 0 < i < len(nodes) - 1
+        if d <= snap:
+            if interior:
+                nodes[i] = xp
+            claimed.add(nodes[i])
+        elif interior and nodes[i] not in claimed and d < 0.25 * h:
+            nodes[i] = xp
+            claimed.add(xp)
+        else:
+            nodes.append(xp)
+            nodes.sort()
+            claimed.add(xp)
+    x = np.array(nodes)
+    if np.any(np.diff(x) <= 0):
+        raise ValueError("mesh has coincident nodes")
+    return x
+
+
+def _elements(x):
+    h = np.diff(x)
+    dofs = 2 * np.arange(len(h))[:, None] + np.arange(4)[None, :]
+    return h, dofs
+
+
+def _assemble(x, local) -> sp.csr_matrix:
+    h, dofs = _elements(x)
+    ke = local(h)  # (ne, 4, 4)
+    rows = np.repeat(dofs, 4, axis=1).ravel()
+    cols = np.tile(dofs, (1, 4)).ravel()
+    n = 2 * len(x)
+    return sp.csr_matrix((ke.ravel(), (rows, cols)), shape=(n, n))
+
+
+def stiffness_matrix(x) -> sp.csr_matrix:
+    """Bending matrix of ``∫ w'' v''`` (unit stiffness), physics.md (3.27)."""
+    def local(h):
+        h = h[:, None, None]
+        m = np.array([[12, 6, -12, 6], [6, 4, -6, 2], [-12, -6, 12, -6], [6, 2, -6, 4]], float)
+        p = np.array([0, 1, 0, 1])  # powers of h per dof
+        return m[None] * h ** (p[None, :, None] + p[None, None, :]) / h**3
+    return _assemble(np.asarray(x, float), local)
+
+
+def geometric_matrix(x) -> sp.csr_matrix:
+    """Geometric matrix of ``∫ w' v'``, physics.md (3.40)."""
+    def local(h):
+        h = h[:, None, None]
+        m = np.array([[36, 3, -36, 3], [3, 4, -3, -1], [-36, -3, 36, -3], [3, -1, -3, 4]], float)
+        p = np.array([0, 1, 0, 1])
+        return m[None] * h ** (p[None, :, None] + p[None, None, :]) / (30.0 * h)
+    return _assemble(np.asarray(x, float), local)
+
+
+def gauss_points(x, n: int):
+    """Gauss-Legendre points and weights on every element.
+
+    Returns
+    -------
+    xq : ndarray, shape (ne * n,)
+    wq : ndarray, shape (ne * n,)
+    elem : ndarray of int, the element of each point
+    """
+    t, wt = np.polynomial.legendre.leggauss(n)
+    t = 0.5 * (t + 1.0)
+    wt = 0.5 * wt
+    x = np.asarray(x, float)
+    h = np.diff(x)
+    xq = (x[:-1, None] + h[:, None] * t[None, :]).ravel()
+    wq = (h[:, None] * wt[None, :]).ravel()
+    elem = np.repeat(np.arange(len(h)), n)
+    return xq, wq, elem
+
+
+def shape_functions(t, h, deriv: int = 0) -> np.ndarray:
+    """Hermite shape functions (or their x-derivatives) at local t in [0, 1].
+
+    Returns an array of shape ``t.shape + (4,)``.
+    """
+    t = np.asarray(t, float)
+    h = np.broadcast_to(np.asarray(h, float), t.shape)
+    one = np.ones_like(t)
+    if deriv == 0:
+        v = [1 - 3 * t**2 + 2 * t**3, h * (t - 2 * t**2 + t**3), 3 * t**2 - 2 * t**3, h * (-t**2 + t**3)]
+    elif deriv == 1:
+        v = [(-6 * t + 6 * t**2) / h, 1 - 4 * t + 3 * t**2, (6 * t - 6 * t**2) / h, -2 * t + 3 * t**2]
+    elif deriv == 2:
+        v = [(-6 + 12 * t) / h**2, (-4 + 6 * t) / h, (6 - 12 * t) / h**2, (-2 + 6 * t) / h]
+    elif deriv == 3:
+        v = [12 * one / h**3, 6 * one / h**2, -12 * one / h**3, 6 * one / h**2]
+    else:
+        raise ValueError("deriv must be 0, 1, 2 or 3")
+    return np.stack(v, axis=-1)
+
+
+def element_of(x, points) -> np.ndarray:
+    """Index of the element containing each point (the left one at a node)."""
+    x = np.asarray(x, float)
+    e = np.searchsorted(x, np.asarray(points, float), side="right") - 1
+    return np.clip(e, 0, len(x) - 2)
+
+
+def eval_matrix(x, points, deriv: int = 0, elem=None) -> sp.csr_matrix:
+    """Sparse matrix mapping the DOF vector to w (or a derivative) at ``points``."""
+    x = np.asarray(x, float)
+    points = np.asarray(points, float)
+    e = element_of(x, points) if elem is None else np.asarray(elem)
+    h = x[e + 1] - x[e]
+    t = (points - x[e]) / h
+    vals = shape_functions(t, h, deriv)
+    rows = np.repeat(np.arange(len(points)), 4)
+    cols = (2 * e[:, None] + np.arange(4)[None, :]).ravel()
+    return sp.csr_matrix((vals.ravel(), (rows, cols)), shape=(len(points), 2 * len(x)))
+
+
+def load_vector(x, q) -> np.ndarray:
+    """Consistent load vector of ``∫ q v`` for a uniform or piecewise-linear q.
+
+    ``q`` is a number (uniform), ``None`` (no load), or a sequence of
+    ``(x, q)`` rows with increasing x; a table is zero outside its range.
+    The integral is exact: elements are split at the table's breakpoints and
+    each piece uses a 3-point Gauss rule (q linear times a cubic).
+    """
+    x = np.asarray(x, float)
+    f = np.zeros(2 * len(x))
+    if q is None:
+        return f
+    if np.isscalar(q):
+        cuts = x
+        qfun = lambda s: np.full_like(s, float(q))  # noqa: E731
+    else:
+        table = np.asarray(q, float)
+        inner = table[:, 0][(table[:, 0] > x[0]) & (table[:, 0] < x[-1])]
+        cuts = np.union1d(x, inner)
+        qfun = lambda s: np.interp(s, table[:, 0], table[:, 1], left=0.0, right=0.0)  # noqa: E731
+    xq, wq, piece = gauss_points(cuts, 3)
+    mid = 0.5 * (cuts[:-1] + cuts[1:])
+    e = element_of(x, mid)[piece]
+    h = x[e + 1] - x[e]
+    vals = shape_functions((xq - x[e]) / h, h, 0) * (wq * qfun(xq))[:, None]
+    np.add.at(f, (2 * e[:, None] + np.arange(4)[None, :]).ravel(), vals.ravel())
+    return f
+
+
+def point_load_vector(x, points) -> np.ndarray:
+    """Consistent load vector of point forces ``[(x_k, F_k), ...]``: F_k N(x_k)."""
+    x = np.asarray(x, float)
+    f = np.zeros(2 * len(x))
+    if len(points) == 0:
+        return f
+    pts = np.asarray(points, float)
+    f += eval_matrix(x, pts[:, 0]).T @ pts[:, 1]
+    return f
