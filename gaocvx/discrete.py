@@ -1,0 +1,305 @@
+"""The discrete, non-dimensional energy of a scene.
+
+:class:`DiscreteProblem` turns a :class:`~gaocvx.scene.Scene` into arrays on
+the free degrees of freedom, in units where the beam has unit length and unit
+bending stiffness and the deflection is measured in a scale ``W`` of the
+answer's size.  Every solver (convex, Newton) works on these arrays; the
+energy, gradient and Hessian here are the single definition of the discrete
+problem, and also its optimality test.
+
+Scaling (x = L xi, w = W w_hat, energies in E0 = EI W^2 / L^3)::
+
+    Pi_hat = 1/2 u'K u - p/2 u'G u + a/12 ∫ (w')^4 - f'u + c/2 ∫ ((g - w)^+)^2
+
+with ``p = P mu L^2 / EI``, ``a = E_alpha W^2 / EI``, ``c = c_F L^4 / EI``,
+``g = -gap / W`` and ``f`` the load vector of ``(1 - nu^2) q L^4 / (EI W)``
+and ``(1 - nu^2) F L^3 / (EI W)``.
+
+Examples
+--------
+>>> from gaocvx.scene import Scene
+>>> scene = Scene.from_dict({"beam": {"model": "euler-bernoulli", "supports": "P4",
+...     "length": 1.0, "E": 2.1e11, "half_thickness": 0.1, "width": 1.0},
+...     "load": {"q": -5e7}, "mesh": {"elements": 8}})
+>>> dp = DiscreteProblem(scene)
+>>> round(dp.P_bar_h / 1e9, 3)     # pi^2 EI / L^2 = 1.382e9 N, a little above
+1.382
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from . import fem
+from .errors import SceneError
+from .linalg import BandedCholesky, NotPositiveDefinite
+from .scene import Scene
+
+__all__ = ["DiscreteProblem", "GAO_POINTS", "CONTACT_POINTS", "STATIONARITY_TOL", "FEASIBILITY_TOL"]
+
+GAO_POINTS = 5       # exact for the degree-8 integrand (w')^4
+CONTACT_POINTS = 5   # Gauss points of the foundation term (and obstacle constraints)
+
+# A solve is "optimal" only when its relative energy-norm residual (see
+# DiscreteProblem.residual) is below this, whichever method produced it ...
+STATIONARITY_TOL = 1e-6
+# ... and, for an obstacle, feasibility, dual sign and complementarity below this.
+FEASIBILITY_TOL = 1e-7
+
+
+class DiscreteProblem:
+    """Non-dimensional arrays of one scene on its mesh.
+
+    Parameters
+    ----------
+    scene : Scene
+        A validated scene.
+    elements : int, optional
+        Override of ``scene.mesh.elements``.
+    check_convexity : bool
+        Raise :class:`SceneError` on ``load.axial`` when P >= P_bar_h.
+
+    Attributes
+    ----------
+    x : ndarray
+        Physical node positions [m].
+    free : ndarray
+        Indices of the free DOFs in the full DOF vector.
+    K, G : sparse matrices
+        Bending and geometric matrices on the free DOFs (non-dimensional).
+    f : ndarray
+        Non-dimensional load vector on the free DOFs.
+    W, E0 : float
+        Deflection scale [m] and energy scale [J].
+    p, a, c, g : float
+        Non-dimensional axial force, Gao coefficient, foundation stiffness
+        and foundation/obstacle level (0 when absent).
+    """
+
+    def __init__(self, scene: Scene, elements: int | None = None, check_convexity: bool = True):
+        self.scene = scene
+        beam = scene.beam
+        self.L = L = beam.length
+        self.EI = EI = beam.EI_eff
+        n_el = scene.mesh.elements if elements is None else int(elements)
+        self.x = fem.uniform_nodes_with_points(L, n_el, [p[0] for p in scene.load.points])
+        self.xi = self.x / L
+        self.n_nodes = len(self.x)
+        self.free = fem.free_dofs(self.n_nodes, beam.supports)
+        fr = self.free
+
+        self.K = fem.stiffness_matrix(self.xi)[fr][:, fr].tocsr()
+        self.G = fem.geometric_matrix(self.xi)[fr][:, fr].tocsr()
+
+        # Loads per unit W: f_unit * (1/W) is the non-dimensional load.
+        lf = beam.load_factor
+        q = scene.load.q
+        if scene.load.is_table:
+            q = [(xk / L, qk) for xk, qk in q]
+        f_unit = fem.load_vector(self.xi, q) * (lf * L**4 / EI)
+        if scene.load.points:
+            pts = [(xk / L, Fk * lf * L**3 / EI) for xk, Fk in scene.load.points]
+            f_unit = f_unit + fem.point_load_vector(self.xi, pts)
+        f_unit = f_unit[fr]
+
+        # Deflection scale: the size of the linear (EB, P = 0, contact-free) answer.
+        self._K_chol = BandedCholesky(self.K)
+        w_lin = np.max(np.abs(self._K_chol.solve(f_unit)[self._w_rows()]), initial=0.0)
+        gap = scene.gap
+        if w_lin > 0:
+            self.W = float(w_lin)
+        elif gap:
+            self.W = float(gap)
+        else:
+            self.W = 1e-3 * L
+        self.E0 = EI * self.W**2 / L**3
+        self.f = f_unit / self.W
+
+        self.P = scene.load.axial
+        self.mu = beam.mu_eff
+        self.p = self.P * self.mu * L**2 / EI
+        self.a = beam.E_alpha_eff * self.W**2 / EI
+
+        # Energies are evaluated from curvatures and slopes at Gauss points, not
+        # as u'Ku: the quadratic form cancels terms of size N^3 down to O(1) and
+        # loses ~N^4 eps of relative accuracy, curvatures lose only ~N^2 eps.
+        xq, self.wq2, eq = fem.gauss_points(self.xi, 2)  # w'' is linear: exact
+        self.B2 = fem.eval_matrix(self.xi, xq, 2, eq)[:, fr].tocsr()
+        if self.a > 0 or self.p != 0:
+            # slopes at 5 points: exact for (w')^4 (degree 8) and (w')^2
+            xq, self.wq_gao, eq = fem.gauss_points(self.xi, GAO_POINTS)
+            self.B1 = fem.eval_matrix(self.xi, xq, 1, eq)[:, fr].tocsr()
+
+        # Foundation / obstacle.
+        self.contact = scene.contact
+        self.c = 0.0
+        self.g = 0.0 if gap is None else -gap / self.W
+        if self.contact is not None:
+            xq, self.wq_c, eq = fem.gauss_points(self.xi, CONTACT_POINTS)
+            self.xq_c = xq
+            self.Nq_full = fem.eval_matrix(self.xi, xq, 0, eq)
+            self.Nq = self.Nq_full[:, fr].tocsr()
+        if self.contact == "foundation":
+            self.k_F = scene.foundation.stiffness
+            self.c = lf * self.k_F * L**4 / EI
+        if self.contact == "obstacle":
+            # w >= g at the nodes and at the foundation quadrature points.
+            pts = np.concatenate([self.xi, self.xq_c])
+            A_full = sp.vstack([fem.eval_matrix(self.xi, self.xi, 0), self.Nq_full]).tocsr()
+            A = A_full[:, fr].tocsr()
+            keep = np.flatnonzero(np.diff(A.indptr) > 0)  # rows touching a free DOF
+            self.con_points = pts[keep]
+            self.A_full = A_full[keep]
+            self.A = A[keep]
+
+        if check_convexity and self.P > 0 and not self.P < self.P_bar_h:
+            raise SceneError(
+                "load.axial",
+                f"P = {self.P:.4g} N is not below the convexity limit P_bar_h = "
+                f"{self.P_bar_h:.4g} N for {beam.supports} (continuum P_bar = {beam.P_bar():.4g} N)",
+                self.P)
+
+    # ------------------------------------------------------------------ helpers
+    def _w_rows(self) -> np.ndarray:
+        """Positions, within the free DOFs, of the deflection DOFs."""
+        return np.flatnonzero(self.free % 2 == 0)
+
+    @property
+    def n(self) -> int:
+        """Number of free DOFs."""
+        return len(self.free)
+
+    @property
+    def needs_gao(self) -> bool:
+        return self.a > 0
+
+    @property
+    def is_quadratic(self) -> bool:
+        """True when the energy is a quadratic (no Gao term, no contact)."""
+        return not self.needs_gao and self.contact is None
+
+    def full(self, u) -> np.ndarray:
+        """The full DOF vector (zeros at supports) from the free DOFs."""
+        out = np.zeros(2 * self.n_nodes)
+        out[self.free] = u
+        return out
+
+    def to_physical(self, u):
+        """Nodal deflection [m] and slope [-] from non-dimensional free DOFs."""
+        full = self.full(u)
+        return full[0::2] * self.W, full[1::2] * self.W / self.L
+
+    def from_physical(self, w, slope) -> np.ndarray:
+        """Non-dimensional free DOFs from nodal deflection [m] and slope."""
+        full = np.empty(2 * self.n_nodes)
+        full[0::2] = np.asarray(w, float) / self.W
+        full[1::2] = np.asarray(slope, float) * self.L / self.W
+        return full[self.free]
+
+    @functools.cached_property
+    def P_bar_h(self) -> float:
+        """Discrete convexity limit [N]: smallest eigenvalue of (K, mu G) on the free DOFs."""
+        lam = smallest_generalized_eigenvalue(self.K, self.G)
+        return lam * self.EI / self.L**2 / self.mu
+
+    @functools.cached_property
+    def quadratic_factor(self) -> BandedCholesky:
+        """Cholesky factor of the quadratic part ``K - p G`` (positive definite below P_bar_h)."""
+        if self.p == 0:
+            return self._K_chol
+        try:
+            return BandedCholesky(self.K - self.p * self.G)
+        except NotPositiveDefinite:
+            raise SceneError("load.axial", f"P = {self.P:.4g} N makes the discrete energy "
+                             f"non-convex (P_bar_h = {self.P_bar_h:.4g} N)", self.P) from None
+
+    # ------------------------------------------------------------------ energy
+    def energy_parts(self, u) -> dict:
+        """Non-dimensional energy parts at free DOFs ``u`` (multiply by E0 for J)."""
+        u = np.asarray(u, float)
+        parts = {"bending": 0.5 * (self.wq2 @ (self.B2 @ u) ** 2), "gao": 0.0, "axial": 0.0,
+                 "load": -(self.f @ u), "foundation": 0.0}
+        if self.needs_gao or self.p:
+            s = self.B1 @ u
+            parts["gao"] = self.a / 12.0 * (self.wq_gao @ s**4)
+            parts["axial"] = -0.5 * self.p * (self.wq_gao @ s**2)
+        if self.contact == "foundation":
+            pen = np.maximum(self.g - self.Nq @ u, 0.0)
+            parts["foundation"] = 0.5 * self.c * (self.wq_c @ pen**2)
+        return {k: float(v) for k, v in parts.items()}
+
+    def energy(self, u) -> float:
+        """Non-dimensional total energy."""
+        return sum(self.energy_parts(u).values())
+
+    def gradient(self, u) -> np.ndarray:
+        """Gradient of the non-dimensional energy (continuous; semismooth with a foundation)."""
+        u = np.asarray(u, float)
+        r = self.K @ u - self.f
+        if self.p:
+            r -= self.p * (self.G @ u)
+        if self.needs_gao:
+            s = self.B1 @ u
+            r += (self.a / 3.0) * (self.B1.T @ (self.wq_gao * s**3))
+        if self.contact == "foundation":
+            pen = np.maximum(self.g - self.Nq @ u, 0.0)
+            r -= self.c * (self.Nq.T @ (self.wq_c * pen))
+        return r
+
+    def hessian(self, u) -> sp.csr_matrix:
+        """(Generalised) Hessian of the non-dimensional energy; banded, SPD below P_bar_h."""
+        u = np.asarray(u, float)
+        H = self.K - self.p * self.G if self.p else self.K.copy()
+        if self.needs_gao:
+            s = self.B1 @ u
+            H = H + self.B1.T @ sp.diags(self.a * self.wq_gao * s**2) @ self.B1
+        if self.contact == "foundation":
+            active = (self.g - self.Nq @ u) > 0
+            H = H + self.Nq.T @ sp.diags(self.c * self.wq_c * active) @ self.Nq
+        return H.tocsr()
+
+    def residual(self, u, lam=None) -> dict:
+        """Optimality measures of free DOFs ``u`` (and obstacle multipliers ``lam``).
+
+        ``stationarity`` is the dual norm ``sqrt(r' H^-1 r)`` of the gradient of
+        the Lagrangian, relative to the energy norm ``sqrt(u' H u)`` of the
+        solution: for a quadratic energy it is exactly the relative error in the
+        energy norm.  For an obstacle, also ``feasibility`` (largest violation
+        of w >= g relative to the deflection scale), ``dual`` (most negative
+        multiplier, relative) and ``complementarity`` (relative).
+        """
+        u = np.asarray(u, float)
+        r = self.gradient(u)
+        if lam is not None:
+            r = r - self.A.T @ lam
+        H = self.hessian(u)
+        try:
+            chol = BandedCholesky(H)
+        except NotPositiveDefinite:
+            return {"stationarity": math.inf}
+        scale = math.sqrt(max(u @ (H @ u), 0.0)) or 1.0
+        out = {"stationarity": float(math.sqrt(max(r @ chol.solve(r), 0.0)) / scale)}
+        if lam is not None:
+            gap = self.A @ u - self.g
+            lam_scale = np.max(np.abs(lam), initial=0.0) or 1.0
+            out["feasibility"] = float(max(-np.min(gap, initial=0.0), 0.0))
+            out["dual"] = float(max(-np.min(lam, initial=0.0), 0.0) / lam_scale)
+            out["complementarity"] = float(np.abs(lam @ gap) / (scale**2))
+        return out
+
+
+def smallest_generalized_eigenvalue(K, G) -> float:
+    """Smallest eigenvalue of ``K v = lambda G v`` (both SPD, sparse)."""
+    n = K.shape[0]
+    if n <= 400:
+        vals = sla.eigh(K.toarray(), G.toarray(), eigvals_only=True, subset_by_index=[0, 0])
+        return float(vals[0])
+    vals = spla.eigsh(K.tocsc(), k=1, M=G.tocsc(), sigma=0.0, which="LM",
+                      return_eigenvectors=False)
+    return float(vals[0])
