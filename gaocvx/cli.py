@@ -1,0 +1,180 @@
+"""The ``gaocvx`` command line.
+
+``main(argv) -> int`` runs one subcommand; tests call it directly.  Exit
+status: 0 solved, 1 solver failure (or a result that is not certified
+optimal), 2 bad input, with ``error: <key>: <what> (got <value>)`` on stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import math
+import sys
+
+from .errors import SceneError, SolverError
+
+__all__ = ["main"]
+
+EXIT_OK, EXIT_SOLVER, EXIT_INPUT = 0, 1, 2
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports usage errors in the project's one-line format."""
+
+    def error(self, message):  # noqa: D401 - argparse API
+        raise SceneError("arguments", message)
+
+
+def _json_default(value):
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    raise TypeError(f"not JSON serialisable: {type(value).__name__}")
+
+
+def _dumps(obj) -> str:
+    # JSON has no inf/nan; an honest null is better than invalid JSON.
+    def clean(v):
+        if isinstance(v, float) and not math.isfinite(v):
+            return None
+        if isinstance(v, dict):
+            return {k: clean(x) for k, x in v.items()}
+        if isinstance(v, (list, tuple)):
+            return [clean(x) for x in v]
+        return v
+    return json.dumps(clean(obj), default=_json_default)
+
+
+def _overrides(pairs) -> dict:
+    from .scene import parse_set
+    out = {}
+    for text in pairs or ():
+        key, value = parse_set(text)
+        out[key] = value
+    return out
+
+
+def _cmd_solve(args) -> int:
+    from .scene import load_scene
+    from .solve import solve
+
+    overrides = _overrides(args.set)
+    if args.elements is not None:
+        overrides["mesh.elements"] = args.elements
+    if args.method is not None:
+        overrides["solve.method"] = args.method
+    if args.solver is not None:
+        overrides["solve.solver"] = args.solver
+    worst = EXIT_OK
+    for path in args.scenes:
+        record, code = {"scene": path}, EXIT_OK
+        try:
+            scene = load_scene(path, overrides)
+            result = solve(scene)
+            record.update(result.to_dict())
+            if not result.success:
+                code = EXIT_SOLVER
+                print(f"error: {path}: solve not certified optimal: {result.message}",
+                      file=sys.stderr)
+            if args.plot:
+                from .plot import save_plot
+                save_plot(result, _plot_name(args.plot, path, len(args.scenes)))
+        except SceneError as exc:
+            code = EXIT_INPUT
+            record.update(status="error", error=str(exc))
+            print(f"error: {exc}", file=sys.stderr)
+        except SolverError as exc:
+            code = EXIT_SOLVER
+            record.update(status="error", error=str(exc))
+            print(f"error: {path}: {exc}", file=sys.stderr)
+        worst = max(worst, code)
+        if args.json:
+            print(_dumps(record), flush=True)
+        elif "error" not in record:
+            if len(args.scenes) > 1:
+                print(f"== {path}")
+            print(result.summary(), flush=True)
+    return worst
+
+
+def _cmd_report(args) -> int:
+    from .report import thesis_markdown, thesis_rows
+
+    command = "gaocvx report thesis" + (f" --output {args.output}" if args.output else "")
+    text = thesis_markdown(thesis_rows(), command)
+    if args.output:
+        from pathlib import Path
+        Path(args.output).write_text(text)
+    else:
+        print(text, end="")
+    return EXIT_OK
+
+
+def _plot_name(name: str, scene_path: str, count: int) -> str:
+    if count == 1:
+        return name
+    from pathlib import Path
+    p = Path(name)
+    return str(p.with_name(f"{p.stem}-{Path(scene_path).stem}{p.suffix}"))
+
+
+def _build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="gaocvx", description="Gao and Euler-Bernoulli beams: bending and "
+                     "contact, solved as convex programs.")
+    parser.add_argument("--version", action="store_true", help="print the version and exit")
+    parser.add_argument("-v", "--verbose", action="count", default=0,
+                        help="log progress to stderr (-vv for debug)")
+    sub = parser.add_subparsers(dest="command", parser_class=_Parser)
+
+    p = sub.add_parser("solve", help="solve one or more scene files")
+    p.add_argument("scenes", nargs="+", metavar="SCENE", help="scene file(s) (TOML)")
+    p.add_argument("--method", help="auto | convex | newton (overrides solve.method)")
+    p.add_argument("--solver", help="clarabel | osqp (convex method; overrides solve.solver)")
+    p.add_argument("--elements", type=int, help="number of elements (overrides mesh.elements)")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override one scene value, e.g. --set beam.nu=0.25 (repeatable)")
+    p.add_argument("--json", action="store_true", help="JSON (Lines) on stdout")
+    p.add_argument("--plot", metavar="FILE", help="write a picture of the deflection (PNG/SVG)")
+    p.set_defaults(func=_cmd_solve)
+
+    p = sub.add_parser("report", help="reproduce the thesis's published cases side by side")
+    p.add_argument("which", choices=["thesis"], help="the report to make")
+    p.add_argument("--output", metavar="FILE", help="write Markdown here instead of stdout")
+    p.set_defaults(func=_cmd_report)
+    return parser
+
+
+def main(argv=None) -> int:
+    """Run the command line; return the exit status."""
+    parser = _build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SceneError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_INPUT
+    logging.basicConfig(level=[logging.WARNING, logging.INFO, logging.DEBUG][min(args.verbose, 2)],
+                        format="%(levelname)s %(name)s: %(message)s")
+    if args.version:
+        from . import __version__
+        print(f"gaocvx {__version__}")
+        return EXIT_OK
+    if args.command is None:
+        parser.print_help(sys.stderr)
+        return EXIT_INPUT
+    try:
+        return args.func(args)
+    except SceneError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_INPUT
+    except SolverError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_SOLVER
+
+
+def run() -> None:  # console-script entry point
+    sys.exit(main())
+
+
+if __name__ == "__main__":  # pragma: no cover
+    run()

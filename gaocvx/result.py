@@ -1,0 +1,187 @@
+"""The result of a solve: nodal values, energies, contact, and evaluators.
+
+Field names follow scipy.optimize where they overlap (``success``,
+``status``, ``message``, ``fun``, ``nit``); :meth:`Result.to_dict` gives the
+JSON object of scene-format.md.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import fem
+from .scene import Scene
+
+__all__ = ["Result", "contact_zones"]
+
+
+def contact_zones(x, in_contact) -> list[list[float]]:
+    """Maximal runs of consecutive nodes in contact, as ``[x_first, x_last]``.
+
+    Examples
+    --------
+    >>> contact_zones([0, 1, 2, 3, 4], [False, True, True, False, True])
+    [[1.0, 2.0], [4.0, 4.0]]
+    """
+    x = np.asarray(x, float)
+    flag = np.concatenate([[False], np.asarray(in_contact, bool), [False]])
+    edges = np.flatnonzero(np.diff(flag.astype(int)))
+    return [[float(x[a]), float(x[b - 1])] for a, b in zip(edges[0::2], edges[1::2])]
+
+
+@dataclass(frozen=True)
+class Result:
+    """The solution of a scene.
+
+    Attributes
+    ----------
+    scene : Scene
+    method : str
+        The method actually used ("convex", "newton").
+    status : str
+        "optimal" when the answer passed the optimality test of the discrete
+        problem, "inaccurate" when it did not.
+    message : str
+    x, w, slope : ndarray
+        Nodes [m], nodal deflection [m] (up positive) and slope w'.
+    energy : float
+        Total potential energy Pi_T [J] (the Gao model's f and c_F).
+    energy_parts : dict
+        "bending", "gao", "axial", "load", "foundation" [J].
+    zones : list of [x_first, x_last] or None
+        Contact zones (None without foundation or obstacle).
+    reaction : ndarray or None
+        Foundation reaction k_F (g - w)^+ [N/m] per node, or obstacle reaction
+        force [N] per node (consistent nodal force of the constraint's
+        multipliers), in physical units.
+    P_bar : float
+        Discrete convexity limit P_bar_h [N].
+    time_s : float
+    nit : int or None
+        Iterations of the method.
+    residual : dict
+        Optimality measures (see :meth:`DiscreteProblem.residual`).
+    extra : dict
+        Method-specific information added to the JSON output.
+    """
+
+    scene: Scene
+    method: str
+    status: str
+    message: str
+    x: np.ndarray
+    w: np.ndarray
+    slope: np.ndarray
+    energy: float
+    energy_parts: dict
+    zones: list | None
+    reaction: np.ndarray | None
+    P_bar: float
+    time_s: float
+    nit: int | None = None
+    solver: str | None = None
+    residual: dict = field(default_factory=dict)
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def success(self) -> bool:
+        """True when the status is "optimal"."""
+        return self.status == "optimal"
+
+    @property
+    def fun(self) -> float:
+        """The total energy (scipy.optimize's name for the objective value)."""
+        return self.energy
+
+    @property
+    def max(self) -> dict:
+        """Largest nodal deflection and its node (the first on ties)."""
+        i = int(np.argmax(self.w))
+        return {"w": float(self.w[i]), "x": float(self.x[i])}
+
+    @property
+    def min(self) -> dict:
+        """Smallest nodal deflection and its node (the first on ties)."""
+        i = int(np.argmin(self.w))
+        return {"w": float(self.w[i]), "x": float(self.x[i])}
+
+    # ------------------------------------------------------------- evaluators
+    def _dofs(self) -> np.ndarray:
+        d = np.empty(2 * len(self.x))
+        d[0::2], d[1::2] = self.w, self.slope
+        return d
+
+    def _eval(self, xs, deriv):
+        xs = np.asarray(xs, float)
+        L = self.scene.beam.length
+        if np.any((xs < 0) | (xs > L)):
+            raise ValueError(f"points must lie on the beam [0, {L:g}]")
+        flat = np.atleast_1d(xs).ravel()
+        out = fem.eval_matrix(self.x, flat, deriv) @ self._dofs()
+        return out.reshape(xs.shape) if xs.ndim else float(out[0])
+
+    def deflection(self, xs):
+        """Deflection w [m] at any points of the beam (Hermite interpolation)."""
+        return self._eval(xs, 0)
+
+    def slope_at(self, xs):
+        """Slope w' at any points of the beam."""
+        return self._eval(xs, 1)
+
+    def moment(self, xs):
+        """Bending moment M = EI w'' [N m] (piecewise linear between nodes)."""
+        return self.scene.beam.EI_eff * self._eval(xs, 2)
+
+    def shear(self, xs):
+        """Shear force V = (EI w'')' [N] (piecewise constant between nodes)."""
+        return self.scene.beam.EI_eff * self._eval(xs, 3)
+
+    # ------------------------------------------------------------- output
+    def to_dict(self) -> dict:
+        """The JSON object of scene-format.md (plus ``message`` and ``residual``)."""
+        beam = self.scene.beam
+        out = {
+            "status": self.status,
+            "method": self.method,
+            "model": beam.model,
+            "supports": beam.supports,
+            "elements": int(len(self.x) - 1),
+            "nodes": {"x": self.x.tolist(), "w": self.w.tolist(), "slope": self.slope.tolist()},
+            "max": self.max,
+            "min": self.min,
+            "energy": float(self.energy),
+            "energy_parts": {k: float(v) for k, v in self.energy_parts.items()},
+            "contact": {
+                "zones": self.zones,
+                "reaction": None if self.reaction is None else self.reaction.tolist(),
+            },
+            "P_bar": float(self.P_bar),
+            "time_s": float(self.time_s),
+            "iterations": self.nit,
+            "solver": self.solver,
+            "message": self.message,
+            "residual": self.residual,
+        }
+        out.update(self.extra)
+        return out
+
+    def summary(self) -> str:
+        """A short human-readable summary."""
+        lines = [
+            f"status   {self.status} ({self.method}{', ' + self.solver if self.solver else ''}; "
+            f"{self.time_s * 1e3:.1f} ms)",
+            f"model    {self.scene.beam.model}, supports {self.scene.beam.supports}, "
+            f"{len(self.x) - 1} elements",
+            f"min w    {self.min['w']:.6g} m at x = {self.min['x']:.6g} m",
+            f"max w    {self.max['w']:.6g} m at x = {self.max['x']:.6g} m",
+            f"energy   {self.energy:.6g} J",
+            f"P_bar_h  {self.P_bar:.6g} N",
+        ]
+        if self.zones is not None:
+            zones = ", ".join(f"[{a:.4g}, {b:.4g}]" for a, b in self.zones) or "none"
+            lines.append(f"contact  {zones}")
+        if not self.success:
+            lines.append(f"note     {self.message}")
+        return "\n".join(lines)

@@ -1,0 +1,113 @@
+"""Solve a scene: choose the method, run it, and build the :class:`Result`.
+
+Examples
+--------
+>>> from gaocvx import Scene, solve
+>>> scene = Scene.from_dict({"beam": {"model": "euler-bernoulli", "supports": "P1",
+...     "length": 1.0, "E": 2.1e11, "half_thickness": 0.1, "width": 1.0},
+...     "load": {"q": -5e7}})
+>>> result = solve(scene)
+>>> result.status, result.method
+('optimal', 'newton')
+>>> round(result.min["w"] / (-5e7 / (384 * 1.4e8)), 9)   # q L^4 / (384 EI)
+1.0
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from .convex import solve_convex
+from .discrete import DiscreteProblem
+from .errors import SceneError, SolverError
+from .newton import solve_newton
+from .result import Result, contact_zones
+from .scene import Scene
+
+__all__ = ["solve", "choose_method", "make_result"]
+
+# Tolerance (relative to the deflection scale) for "in contact" with a rigid obstacle.
+OBSTACLE_CONTACT_TOL = 1e-6
+
+
+def choose_method(scene: Scene, method: str | None = None) -> str:
+    """The method that ``method`` (default: the scene's) resolves to.
+
+    ``auto`` is the fastest exact method for the scene: Newton (one banded
+    solve when the energy is quadratic) without an obstacle, the convex
+    program with one.
+    """
+    method = method or scene.solve.method
+    if method == "auto":
+        return "convex" if scene.contact == "obstacle" else "newton"
+    if method == "newton" and scene.contact == "obstacle":
+        raise SceneError("solve.method", "newton does not handle a rigid obstacle yet; "
+                         "use \"convex\" or \"auto\"", method)
+    return method
+
+
+def solve(scene: Scene, method: str | None = None, *, elements: int | None = None,
+          solver: str | None = None, problem: DiscreteProblem | None = None) -> Result:
+    """Solve a scene and return its :class:`Result`.
+
+    Parameters
+    ----------
+    scene : Scene
+    method : {"auto", "convex", "newton"}, optional
+        Overrides ``scene.solve.method``.
+    elements : int, optional
+        Overrides ``scene.mesh.elements``.
+    solver : {"clarabel", "osqp"}, optional
+        Convex solver; overrides ``scene.solve.solver``.
+    problem : DiscreteProblem, optional
+        A discretisation of this scene to reuse.
+
+    Raises
+    ------
+    SceneError
+        For input the method cannot accept (e.g. P >= P_bar_h).
+    SolverError
+        If the method returns no solution at all.  A solution that fails its
+        optimality test is returned with ``status == "inaccurate"``.
+    """
+    t0 = time.perf_counter()
+    if method is not None and method not in ("auto", "convex", "newton"):
+        raise SceneError("solve.method", "must be one of 'auto', 'convex', 'newton'", method)
+    chosen = choose_method(scene, method)
+    dp = problem if problem is not None else DiscreteProblem(scene, elements=elements)
+    if chosen == "convex":
+        raw = solve_convex(dp, solver or scene.solve.solver)
+    elif chosen == "newton":
+        raw = solve_newton(dp)
+    else:  # pragma: no cover - validated above
+        raise SolverError(f"unknown method {chosen!r}")
+    return make_result(dp, raw, chosen, time.perf_counter() - t0)
+
+
+def make_result(dp: DiscreteProblem, raw: dict, method: str, elapsed: float,
+                extra: dict | None = None) -> Result:
+    """Turn a solver's raw output on ``dp`` into a :class:`Result` in physical units."""
+    u = raw["u"]
+    w, slope = dp.to_physical(u)
+    parts = {k: v * dp.E0 for k, v in dp.energy_parts(u).items()}
+    beam = dp.scene.beam
+    zones = reaction = None
+    if dp.contact == "foundation":
+        g = -dp.scene.foundation.gap
+        zones = contact_zones(dp.x, w < g)
+        reaction = dp.k_F * np.maximum(g - w, 0.0)
+    elif dp.contact == "obstacle":
+        g = -dp.scene.obstacle.gap
+        zones = contact_zones(dp.x, w <= g + OBSTACLE_CONTACT_TOL * dp.W)
+        lam = raw["lam"]
+        force = dp.A_full.T @ lam  # consistent nodal forces, non-dimensional
+        reaction = force[0::2] * (dp.E0 / dp.W) / beam.load_factor
+    return Result(
+        scene=dp.scene, method=method, status=raw["status"], message=raw["message"],
+        x=dp.x.copy(), w=w, slope=slope, energy=float(sum(parts.values())),
+        energy_parts=parts, zones=zones, reaction=reaction, P_bar=dp.P_bar_h,
+        time_s=elapsed, nit=raw.get("nit"), solver=raw.get("solver"),
+        residual=raw.get("residual", {}), extra=extra or {},
+    )
