@@ -1,0 +1,125 @@
+"""The command line: exit codes, JSON contract, errors on stderr."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from gaocvx.cli import main
+
+EXAMPLES = Path(__file__).parent.parent / "examples"
+
+SCENE = """
+[beam]
+model = "gao"
+supports = "P1"
+length = 1.0
+E = 2.1e11
+nu = 0.3
+half_thickness = 0.1
+width = 1.0
+
+[load]
+q = -5e8
+
+[foundation]
+gap = 0.007
+stiffness = 5e8
+"""
+
+JSON_KEYS = {"status", "method", "model", "supports", "elements", "nodes", "max", "min", "energy",
+             "energy_parts", "contact", "P_bar", "time_s"}
+
+
+@pytest.fixture
+def scene(tmp_path):
+    path = tmp_path / "scene.toml"
+    path.write_text(SCENE)
+    return path
+
+
+def run(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_solve_json_contract(capsys, scene):
+    code, out, err = run(capsys, "solve", scene, "--json")
+    assert code == 0, err
+    data = json.loads(out)
+    assert JSON_KEYS <= set(data)
+    assert data["scene"] == str(scene)
+    assert data["status"] == "optimal"
+    assert set(data["energy_parts"]) == {"bending", "gao", "axial", "load", "foundation"}
+    assert data["energy"] == pytest.approx(sum(data["energy_parts"].values()))
+    assert data["min"]["x"] == 0.5 and data["min"]["w"] == pytest.approx(-8.444e-3, rel=1e-3)
+    assert data["contact"]["zones"] == [[0.375, 0.625]]
+    n = data["elements"] + 1
+    assert len(data["nodes"]["x"]) == len(data["nodes"]["w"]) == len(data["nodes"]["slope"]) == n
+    assert len(data["contact"]["reaction"]) == n
+    assert data["P_bar"] == pytest.approx(4.672e9, rel=1e-3)
+
+
+def test_human_summary(capsys, scene):
+    code, out, _ = run(capsys, "solve", scene)
+    assert code == 0
+    assert "optimal" in out and "contact" in out and "P_bar_h" in out
+
+
+def test_set_and_elements(capsys, scene):
+    code, out, _ = run(capsys, "solve", scene, "--json", "--elements", "16",
+                       "--set", "beam.model=euler-bernoulli", "--set", "foundation.stiffness=1e11")
+    data = json.loads(out)
+    assert code == 0 and data["elements"] == 16 and data["model"] == "euler-bernoulli"
+
+
+@pytest.mark.parametrize("argv, key", [
+    (["--set", "load.axial=5e9"], "load.axial"),
+    (["--set", "beam.nu=0.7"], "beam.nu"),
+    (["--set", "beam.colour=1"], "beam.colour"),
+    (["--set", "obstacle.gap=0.01"], "obstacle"),
+    (["--set", "load.points=[[1.5, 1.0]]"], "load.points[0][0]"),
+    (["--elements", "0"], "mesh.elements"),
+    (["--method", "psychic"], "solve.method"),
+    (["--method", "convex", "--solver", "osqp"], "solve.solver"),
+])
+def test_bad_input_exit_2_names_key(capsys, scene, argv, key):
+    code, out, err = run(capsys, "solve", scene, *argv)
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: {key}: "), err
+    assert "Traceback" not in err and out == ""
+
+
+def test_convexity_limit_message(capsys, scene):
+    code, _, err = run(capsys, "solve", scene, "--set", "load.axial=5e9")
+    assert code == 2
+    assert "P_bar_h = 4.672e+09 N for P1" in err and "(got 5e+09)" in err
+
+
+def test_several_scenes_json_lines(capsys, scene, tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(SCENE.replace("nu = 0.3", "nu = 3"))
+    code, out, err = run(capsys, "solve", scene, bad, scene, "--json")
+    lines = [json.loads(line) for line in out.strip().splitlines()]
+    assert [r["scene"] for r in lines] == [str(scene), str(bad), str(scene)]
+    assert [r["status"] for r in lines] == ["optimal", "error", "optimal"]
+    assert lines[1]["error"].startswith("beam.nu: ")
+    assert code == 2 and err.startswith("error: beam.nu")
+
+
+def test_missing_file_and_usage(capsys, tmp_path):
+    code, _, err = run(capsys, "solve", tmp_path / "none.toml")
+    assert code == 2 and err.startswith("error: ") and "cannot read" in err
+    code, _, err = run(capsys, "solve")
+    assert code == 2 and err.startswith("error: arguments:")
+    code, _, err = run(capsys, "frobnicate")
+    assert code == 2 and err.startswith("error: arguments:")
+
+
+@pytest.mark.parametrize("path", sorted(EXAMPLES.glob("*.toml")), ids=lambda p: p.stem)
+def test_examples_solve(capsys, path):
+    code, out, err = run(capsys, "solve", path, "--json")
+    assert code == 0, err
+    assert json.loads(out)["status"] == "optimal"
