@@ -109,8 +109,10 @@ class DiscreteProblem:
         f_unit = f_unit[fr]
 
         # Deflection scale: the size of the linear (EB, P = 0, contact-free) answer.
-        self._K_chol = BandedCholesky(self.K)
-        w_lin = np.max(np.abs(self._K_chol.solve(f_unit)[self._w_rows()]), initial=0.0)
+        self._K_chol = BandedCholesky(self.K) if self.n else None
+        w_lin = 0.0
+        if self.n:
+            w_lin = np.max(np.abs(self._K_chol.solve(f_unit)[self._w_rows()]), initial=0.0)
         gap = scene.gap
         if w_lin > 0:
             self.W = float(w_lin)
@@ -205,6 +207,8 @@ class DiscreteProblem:
     @functools.cached_property
     def P_bar_h(self) -> float:
         """Discrete convexity limit [N]: smallest eigenvalue of (K, mu G) on the free DOFs."""
+        if self.n == 0:  # every DOF is fixed (one clamped-clamped element)
+            return math.inf
         lam = smallest_generalized_eigenvalue(self.K, self.G)
         return lam * self.EI / self.L**2 / self.mu
 
@@ -275,6 +279,8 @@ class DiscreteProblem:
         multiplier, relative) and ``complementarity`` (relative).
         """
         u = np.asarray(u, float)
+        if self.n == 0:
+            return {"stationarity": 0.0}
         r = self.gradient(u)
         if lam is not None:
             r = r - self.A.T @ lam
@@ -283,7 +289,11 @@ class DiscreteProblem:
             chol = BandedCholesky(H)
         except NotPositiveDefinite:
             return {"stationarity": math.inf}
-        scale = math.sqrt(max(u @ (H @ u), 0.0)) or 1.0
+        # The size of the problem: the solution's energy norm, or the load's when
+        # the solution is (near) zero, e.g. a beam resting on a gap-0 obstacle.
+        # Without any load the answer is w = 0, and W (the unit of u) is the scale.
+        load = math.sqrt(max(self.f @ chol.solve(self.f), 0.0))
+        scale = max(math.sqrt(max(u @ (H @ u), 0.0)), load) if load > 0 else 1.0
         out = {"stationarity": float(math.sqrt(max(r @ chol.solve(r), 0.0)) / scale)}
         if lam is not None:
             gap = self.A @ u - self.g

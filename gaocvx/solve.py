@@ -77,7 +77,11 @@ def solve(scene: Scene, method: str | None = None, *, elements: int | None = Non
         raise SceneError("solve.method", "must be one of 'auto', 'convex', 'newton'", method)
     chosen = choose_method(scene, method)
     dp = problem if problem is not None else DiscreteProblem(scene, elements=elements)
-    if chosen == "convex":
+    if dp.n == 0:  # every DOF fixed by the supports: the answer is w = 0
+        raw = {"u": np.zeros(0), "lam": np.zeros(dp.A.shape[0]) if dp.contact == "obstacle"
+               else None, "status": "optimal", "message": "no free degrees of freedom: w = 0",
+               "residual": {"stationarity": 0.0}, "nit": 0, "solver": None}
+    elif chosen == "convex":
         raw = solve_convex(dp, solver or scene.solve.solver)
     elif chosen == "newton":
         raw = solve_newton(dp)
@@ -100,7 +104,14 @@ def make_result(dp: DiscreteProblem, raw: dict, method: str, elapsed: float,
         reaction = dp.k_F * np.maximum(g - w, 0.0)
     elif dp.contact == "obstacle":
         g = -dp.scene.obstacle.gap
-        zones = contact_zones(dp.x, w <= g + OBSTACLE_CONTACT_TOL * dp.W)
+        touching = w <= g + OBSTACLE_CONTACT_TOL * dp.W
+        # With gap = 0 a support sits on the obstacle's level; it counts as
+        # contact only where the contact continues into the span.
+        supported = np.setdiff1d(np.arange(dp.n_nodes), dp.free[dp.free % 2 == 0] // 2)
+        nxt = np.r_[touching[1:], False]
+        prev = np.r_[False, touching[:-1]]
+        touching[supported] &= (nxt | prev)[supported]
+        zones = contact_zones(dp.x, touching)
         lam = raw["lam"]
         force = dp.A_full.T @ lam  # consistent nodal forces, non-dimensional
         reaction = force[0::2] * (dp.E0 / dp.W) / beam.load_factor

@@ -57,3 +57,12 @@ def test_newton_refuses_obstacle():
     from gaocvx import SceneError
     with pytest.raises(SceneError, match="^solve.method"):
         solve(Scene.from_dict(scene_dict(obstacle=0.01)), "newton")
+
+
+@pytest.mark.parametrize("method", ["newton", "convex"])
+def test_degenerate_scenes(method):
+    """No free DOF (one clamped-clamped element) and no load: w = 0, status optimal."""
+    r = solve(Scene.from_dict(scene_dict("P1", elements=1)), method)
+    assert r.success and r.P_bar == np.inf and np.all(r.w == 0) and r.energy == 0
+    r = solve(Scene.from_dict(scene_dict("P4", q=None)), method)
+    assert r.success and np.all(r.w == 0)

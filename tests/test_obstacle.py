@@ -104,3 +104,14 @@ def test_flat_contact_zone():
     # Rigid contact concentrates forces at the zone's ends (physics.md).
     ends = [int(np.argmin(abs(result.x - a))), int(np.argmin(abs(result.x - b)))]
     assert result.reaction[ends].min() > result.reaction[inside].mean()
+
+
+def test_gap_zero_obstacle():
+    """A beam pushed down onto an obstacle at its own level stays at w = 0 and the
+    obstacle carries the whole load; pushed up, it leaves the obstacle (supports alone
+    do not count as contact)."""
+    down = solve(Scene.from_dict(scene_dict("P4", q=-5e7, obstacle=0.0)), "convex")
+    assert down.success and down.zones == [[0.0, 1.0]]
+    assert np.abs(down.w).max() < 1e-9
+    up = solve(Scene.from_dict(scene_dict("P3", q=5e7, obstacle=0.0)), "convex")
+    assert up.success and up.zones == [] and up.w.min() >= 0.0

@@ -28,7 +28,7 @@ KNOWN = {
 }
 
 
-def cases():
+def _cases():
     for case in THESIS["cases"]:
         for model in ("euler-bernoulli", "gao"):
             yield pytest.param(case, model, id=f"{case['table']}-{model}")
@@ -66,7 +66,7 @@ def thesis_mu(case, model):
     return None
 
 
-@pytest.mark.parametrize("case, model", cases())
+@pytest.mark.parametrize("case, model", list(_cases()))
 def test_reproduces_thesis(case, model):
     published = case["thesis"][model]
     result = solve(build(case, model, thesis_mu(case, model)), "convex")
