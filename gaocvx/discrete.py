@@ -82,13 +82,19 @@ class DiscreteProblem:
         and foundation/obstacle level (0 when absent).
     """
 
-    def __init__(self, scene: Scene, elements: int | None = None, check_convexity: bool = True):
+    def __init__(self, scene: Scene, elements: int | None = None, check_convexity: bool = True,
+                 nodes=None):
         self.scene = scene
         beam = scene.beam
         self.L = L = beam.length
         self.EI = EI = beam.EI_eff
-        n_el = scene.mesh.elements if elements is None else int(elements)
-        self.x = fem.uniform_nodes_with_points(L, n_el, [p[0] for p in scene.load.points])
+        if nodes is not None:
+            # An explicit mesh (e.g. the nodes of a result computed elsewhere);
+            # point forces between its nodes act through the shape functions.
+            self.x = np.asarray(nodes, float)
+        else:
+            n_el = scene.mesh.elements if elements is None else int(elements)
+            self.x = fem.uniform_nodes_with_points(L, n_el, [p[0] for p in scene.load.points])
         self.xi = self.x / L
         self.n_nodes = len(self.x)
         self.free = fem.free_dofs(self.n_nodes, beam.supports)
@@ -107,6 +113,14 @@ class DiscreteProblem:
             pts = [(xk / L, Fk * lf * L**3 / EI) for xk, Fk in scene.load.points]
             f_unit = f_unit + fem.point_load_vector(self.xi, pts)
         f_unit = f_unit[fr]
+        # The load as a function of xi (piecewise-linear table, knots in xi) and the
+        # point forces, per unit W: the transformed loads of CVM integrate these.
+        self._q_table_unit = None
+        if q is not None:
+            table = q if scene.load.is_table else [(0.0, q), (1.0, q)]
+            self._q_table_unit = np.array([(t, v * lf * L**4 / EI) for t, v in table], float)
+        self._points_unit = np.array([(xk / L, Fk * lf * L**3 / EI)
+                                      for xk, Fk in scene.load.points], float).reshape(-1, 2)
 
         # Deflection scale: the size of the linear (EB, P = 0, contact-free) answer.
         self._K_chol = BandedCholesky(self.K) if self.n else None
@@ -137,6 +151,7 @@ class DiscreteProblem:
             # slopes at 5 points: exact for (w')^4 (degree 8) and (w')^2
             xq, self.wq_gao, eq = fem.gauss_points(self.xi, GAO_POINTS)
             self.B1 = fem.eval_matrix(self.xi, xq, 1, eq)[:, fr].tocsr()
+            self.B1T = self.B1.T.tocsr()  # transposes are cached: gradients are hot
 
         # Foundation / obstacle.
         self.contact = scene.contact
@@ -147,6 +162,7 @@ class DiscreteProblem:
             self.xq_c = xq
             self.Nq_full = fem.eval_matrix(self.xi, xq, 0, eq)
             self.Nq = self.Nq_full[:, fr].tocsr()
+            self.NqT = self.Nq.T.tocsr()
         if self.contact == "foundation":
             self.k_F = scene.foundation.stiffness
             self.c = lf * self.k_F * L**4 / EI
@@ -223,7 +239,22 @@ class DiscreteProblem:
             raise SceneError("load.axial", f"P = {self.P:.4g} N makes the discrete energy "
                              f"non-convex (P_bar_h = {self.P_bar_h:.4g} N)", self.P) from None
 
+    @property
+    def q_table(self) -> np.ndarray | None:
+        """Non-dimensional load q_hat as a piecewise-linear table [[xi, q], ...] (None: no q)."""
+        return None if self._q_table_unit is None else self._q_table_unit * [1.0, 1.0 / self.W]
+
+    @property
+    def point_forces(self) -> np.ndarray:
+        """Non-dimensional point forces [[xi_k, F_k], ...]."""
+        return self._points_unit * [1.0, 1.0 / self.W]
+
     # ------------------------------------------------------------------ energy
+    def nonlinear_gradient(self, u) -> np.ndarray:
+        """Gradient of the Gao, axial and foundation parts only (what CVM hides in u)."""
+        u = np.asarray(u, float)
+        return self.gradient(u) - (self.K @ u - self.f)
+
     def energy_parts(self, u) -> dict:
         """Non-dimensional energy parts at free DOFs ``u`` (multiply by E0 for J)."""
         u = np.asarray(u, float)
@@ -250,10 +281,10 @@ class DiscreteProblem:
             r -= self.p * (self.G @ u)
         if self.needs_gao:
             s = self.B1 @ u
-            r += (self.a / 3.0) * (self.B1.T @ (self.wq_gao * s**3))
+            r += (self.a / 3.0) * (self.B1T @ (self.wq_gao * s**3))
         if self.contact == "foundation":
             pen = np.maximum(self.g - self.Nq @ u, 0.0)
-            r -= self.c * (self.Nq.T @ (self.wq_c * pen))
+            r -= self.c * (self.NqT @ (self.wq_c * pen))
         return r
 
     def hessian(self, u) -> sp.csr_matrix:
@@ -262,10 +293,10 @@ class DiscreteProblem:
         H = self.K - self.p * self.G if self.p else self.K.copy()
         if self.needs_gao:
             s = self.B1 @ u
-            H = H + self.B1.T @ sp.diags(self.a * self.wq_gao * s**2) @ self.B1
+            H = H + self.B1T @ sp.diags(self.a * self.wq_gao * s**2) @ self.B1
         if self.contact == "foundation":
             active = (self.g - self.Nq @ u) > 0
-            H = H + self.Nq.T @ sp.diags(self.c * self.wq_c * active) @ self.Nq
+            H = H + self.NqT @ sp.diags(self.c * self.wq_c * active) @ self.Nq
         return H.tocsr()
 
     def residual(self, u, lam=None) -> dict:
