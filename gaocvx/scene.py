@@ -43,7 +43,10 @@ __all__ = [
 
 MODELS = ("gao", "euler-bernoulli")
 SUPPORTS = ("P1", "P2", "P3", "P4")
-METHODS = ("auto", "convex", "newton")
+METHODS = ("auto", "convex", "newton", "cvm")
+TRANSFORMS = ("auto", "T1", "T2", "T3")
+CONTROLS = ("P1", "full")
+MINIMIZERS = ("projected-newton", "conditional-gradient")
 SOLVERS = ("clarabel", "osqp")
 MAX_ELEMENTS = 1_000_000
 
@@ -290,15 +293,41 @@ class MeshSpec:
 
 @dataclass(frozen=True)
 class SolveOptions:
-    """Solver options: ``method`` and, for the convex method, ``solver``."""
+    """Solver options.
+
+    Parameters
+    ----------
+    method : {"auto", "convex", "newton", "cvm"}
+    solver : {"clarabel", "osqp"}
+        Convex method only.
+    transform : {"auto", "T1", "T2", "T3"}
+        CVM only: auto is T2 for P3, T3 for P4, T1 otherwise.
+    control : {"P1", "full"}
+        CVM only: the thesis's piecewise-linear control, or the whole discrete
+        load space (the consistency check).
+    minimizer : {"projected-newton", "conditional-gradient"}
+        CVM only.
+    bound : float or None
+        CVM only: the control bound C (> 0) in the control's physical units;
+        by default chosen so that it is inactive.
+    """
 
     method: str = "auto"
     solver: str = "clarabel"
-    KEYS = ("method", "solver")
+    transform: str = "auto"
+    control: str = "P1"
+    minimizer: str = "projected-newton"
+    bound: float | None = None
+    KEYS = ("method", "solver", "transform", "control", "minimizer", "bound")
 
     def __post_init__(self):
         _choice("solve.method", self.method, METHODS)
         _choice("solve.solver", self.solver, SOLVERS)
+        _choice("solve.transform", self.transform, TRANSFORMS)
+        _choice("solve.control", self.control, CONTROLS)
+        _choice("solve.minimizer", self.minimizer, MINIMIZERS)
+        if self.bound is not None:
+            object.__setattr__(self, "bound", _number("solve.bound", self.bound, lo=0, lo_open=True))
 
 
 _PARTS = {"beam": Beam, "load": Load, "foundation": Foundation, "obstacle": Obstacle,
@@ -321,6 +350,14 @@ class Scene:
             raise SceneError("obstacle", "a scene has either a foundation or an obstacle, "
                              "not both", "both given")
         L = self.beam.length
+        transform = self.solve.transform
+        if transform in ("T2", "T3") and self.beam.supports != {"T2": "P3", "T3": "P4"}[transform]:
+            raise SceneError("solve.transform", f"{transform} is for supports "
+                             f"{ {'T2': 'P3', 'T3': 'P4'}[transform] } only, not "
+                             f"{self.beam.supports}", transform)
+        if self.solve.method == "cvm" and self.obstacle is not None:
+            raise SceneError("solve.method", "cvm handles a deformable foundation or none, "
+                             "not a rigid obstacle", "cvm")
         if self.load.is_table:
             for i, (x, _) in enumerate(self.load.q):
                 if not 0.0 <= x <= L:

@@ -20,11 +20,12 @@ import time
 import numpy as np
 
 from .convex import solve_convex
+from .cvm import solve_cvm
 from .discrete import DiscreteProblem
 from .errors import SceneError, SolverError
 from .newton import solve_newton
 from .result import Result, contact_zones
-from .scene import Scene
+from .scene import METHODS, Scene
 
 __all__ = ["solve", "choose_method", "make_result"]
 
@@ -73,8 +74,11 @@ def solve(scene: Scene, method: str | None = None, *, elements: int | None = Non
         optimality test is returned with ``status == "inaccurate"``.
     """
     t0 = time.perf_counter()
-    if method is not None and method not in ("auto", "convex", "newton"):
-        raise SceneError("solve.method", "must be one of 'auto', 'convex', 'newton'", method)
+    if method is not None and method not in METHODS:
+        raise SceneError("solve.method", "must be one of " + ", ".join(map(repr, METHODS)), method)
+    if method == "cvm" and scene.contact == "obstacle":
+        raise SceneError("solve.method", "cvm handles a deformable foundation or none, "
+                         "not a rigid obstacle", method)
     chosen = choose_method(scene, method)
     dp = problem if problem is not None else DiscreteProblem(scene, elements=elements)
     if dp.n == 0:  # every DOF fixed by the supports: the answer is w = 0
@@ -85,6 +89,18 @@ def solve(scene: Scene, method: str | None = None, *, elements: int | None = Non
         raw = solve_convex(dp, solver or scene.solve.solver)
     elif chosen == "newton":
         raw = solve_newton(dp)
+    elif chosen == "cvm":
+        opts = scene.solve
+        raw = solve_cvm(dp, opts.transform, opts.control, opts.minimizer, opts.bound)
+        # The energy gap against the convex ground truth of the same mesh.
+        truth = solve_convex(dp, "clarabel")
+        gap = (dp.energy(raw["u"]) - dp.energy(truth["u"])) * dp.E0
+        info = {k: raw["cvm"][k] for k in ("transform", "control", "minimizer", "iterations",
+                                           "control_bound_active", "bound", "bound_unit")}
+        info["energy_gap"] = gap
+        info["ground_truth_status"] = truth["status"]
+        elapsed = time.perf_counter() - t0
+        return make_result(dp, raw, chosen, elapsed, extra={"cvm": info})
     else:  # pragma: no cover - validated above
         raise SolverError(f"unknown method {chosen!r}")
     return make_result(dp, raw, chosen, time.perf_counter() - t0)

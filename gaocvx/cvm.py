@@ -1,0 +1,589 @@
+"""The control variational method (CVM) of Sofonea, Tiba, Machalová and Netuka.
+
+The nonlinear terms of the beam are hidden in a control ``u``; the state
+solves a *linear* problem of order 4 (T1) or 2 (T2, T3), and the transformed
+cost ``J`` is minimised over the box ``|u| <= C``.  Everything is written on
+the non-dimensional arrays of :class:`~gaocvx.discrete.DiscreteProblem`.
+
+Transforms (cvm.md):
+
+* **T1** (any support): ``K w = f + B u`` with Hermite cubics,
+  ``J1 = 1/2 (B u)'(w - w0) + N(w)``, adjoint ``K p = 1/2 B u + grad N(w)``,
+  gradient ``B'(p + 1/2 (w - w0))``.  For P3 with the piecewise-linear control
+  the free-end condition is nonlinear; the thesis's scalar end control ``r``
+  (1.114) is appended to ``u`` (as the point force ``-r`` at x = L) and
+  minimised jointly, which is equivalent to its fixed-point update.
+* **T2** (P3): ``z = w'`` solves ``e(z, phi) = (G + u, phi)`` with
+  ``G(x) = ∫_x^L f`` (the load's shear).  z is discretised with *continuous
+  quadratic* elements, so that ``w = ∫_0^x z`` is exactly a Hermite cubic of
+  the same mesh (with linear elements, as in the thesis, the reachable
+  deflections are C1 piecewise quadratics only, and the full control could not
+  reproduce the Hermite minimiser).  ``J2 = 1/2 (u, z - z0) + N(w)``,
+  adjoint ``E p = 1/2 (u, .) + T' grad N(w)``.
+* **T3** (P4): the moment ``m = Pi G + u`` (``G`` the load's moment,
+  ``-G'' = f``; ``Pi`` the L2 projection onto discontinuous linears, which
+  contains the controls) gives ``w'' = -m`` integrated exactly, again a
+  Hermite cubic.  ``J3 = 1/2 ∫ u^2 + N(w)``; the cross term ``∫ (Pi G - G) u``
+  vanishes by the projection, so ``J3`` equals the energy plus a constant.
+
+Here ``N = Pi_N + Pi_P [+ Pi_F]`` are the Gao, axial and foundation energies.
+In each case ``J(u) = Pi(w(u)) + const`` holds exactly in the discrete
+setting, which the tests check, together with the adjoint gradient against
+finite differences.
+
+Controls: ``"P1"``, the thesis's continuous piecewise-linear control on the
+mesh (for T3 vanishing at both ends, U_ad^0); ``"full"``, the whole discrete
+load space of the state (every discrete state is reachable, so the CVM
+optimum is the convex minimiser: the consistency check).
+
+Minimisers: ``"conditional-gradient"`` (the thesis's) and
+``"projected-newton"`` (Bertsekas's projected Newton method with the exact
+reduced Hessian ``S' H S``).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from . import fem
+from .discrete import DiscreteProblem
+from .errors import SceneError
+from .linalg import BandedCholesky, NotPositiveDefinite
+
+__all__ = ["make_transform", "solve_cvm", "TRANSFORMS", "CONTROLS", "MINIMIZERS"]
+
+from .scene import CONTROLS, MINIMIZERS, TRANSFORMS  # noqa: E402  (one list of names)
+AUTO = {"P1": "T1", "P2": "T1", "P3": "T2", "P4": "T3"}
+ALLOWED = {"T1": ("P1", "P2", "P3", "P4"), "T2": ("P3",), "T3": ("P4",)}
+
+
+# ------------------------------------------------------------------ transformed loads
+def _load_primitives(dp: DiscreteProblem):
+    """Functions Q1(x) = ∫_0^x q and Q2(x) = ∫_0^x (x - s) q(s) ds of the non-dim load."""
+    table = dp.q_table
+    if table is None:
+        zero = lambda x: np.zeros_like(np.asarray(x, float))  # noqa: E731
+        return zero, zero
+    # The table is zero outside its range: add those pieces explicitly.
+    xs, qs = list(table[:, 0]), list(table[:, 1])
+    if xs[0] > 0:
+        xs, qs = [0.0, xs[0]] + xs, [0.0, 0.0] + qs
+    if xs[-1] < 1:
+        xs, qs = xs + [xs[-1], 1.0], qs + [0.0, 0.0]
+    xs, qs = np.array(xs), np.array(qs)
+    dx = np.diff(xs)
+    q1 = np.concatenate([[0.0], np.cumsum(0.5 * dx * (qs[:-1] + qs[1:]))])
+    q2 = np.concatenate([[0.0], np.cumsum(dx * q1[:-1] + dx**2 * (2 * qs[:-1] + qs[1:]) / 6)])
+
+    def piece(x):
+        x = np.asarray(x, float)
+        k = np.clip(np.searchsorted(xs, x, side="right") - 1, 0, len(xs) - 2)
+        while np.any(dx[k] == 0):  # a zero-length piece (a jump): step over it
+            k = np.where(dx[k] == 0, k + 1, k)
+        s = x - xs[k]
+        slope = (qs[k + 1] - qs[k]) / dx[k]
+        return k, s, slope
+
+    def Q1(x):
+        k, s, slope = piece(x)
+        return q1[k] + qs[k] * s + slope * s**2 / 2
+
+    def Q2(x):
+        k, s, slope = piece(x)
+        return q2[k] + q1[k] * s + qs[k] * s**2 / 2 + slope * s**3 / 6
+
+    return Q1, Q2
+
+
+def shear_load(dp: DiscreteProblem, x) -> np.ndarray:
+    """T2's transformed load G(x) = ∫_x^1 f + Σ_{x_k > x} F_k (non-dimensional)."""
+    Q1, _ = _load_primitives(dp)
+    x = np.asarray(x, float)
+    G = Q1(1.0) - Q1(x)
+    for xk, Fk in dp.point_forces:
+        G = G + Fk * (xk > x)
+    return G
+
+
+def moment_load(dp: DiscreteProblem, x) -> np.ndarray:
+    """T3's transformed load: -G'' = f, G(0) = G(1) = 0 (non-dimensional)."""
+    _, Q2 = _load_primitives(dp)
+    x = np.asarray(x, float)
+    pts = dp.point_forces
+    c = Q2(1.0) + sum(Fk * (1.0 - xk) for xk, Fk in pts)
+    G = c * x - Q2(x)
+    for xk, Fk in pts:
+        G = G - Fk * np.maximum(x - xk, 0.0)
+    return G
+
+
+# ------------------------------------------------------------------ transforms
+class _Transform:
+    """The affine state map ``U(u) = U0 + S u`` with the thesis's cost and adjoint.
+
+    Subclasses set ``m`` (number of controls), ``scale`` (physical value of one
+    non-dimensional control unit, for reporting ``bound``), and implement
+    ``_state``, ``_cost``, ``_adjoint_gradient``, ``apply_S`` and ``apply_ST``.
+    """
+
+    name = ""
+    unit = ""
+
+    def __init__(self, dp: DiscreteProblem, control: str):
+        self.dp = dp
+        self.control = control
+
+    def state(self, u) -> np.ndarray:
+        """Hermite free DOFs (non-dimensional) of the state for control ``u``."""
+        return self.U0 + self.apply_S(u)
+
+    def cost(self, u, U=None) -> float:
+        """The thesis's transformed cost J(u)."""
+        U = self.state(u) if U is None else U
+        return self._cost(u, U)
+
+    def gradient(self, u, U=None) -> np.ndarray:
+        """Gradient of J via the discrete adjoint."""
+        U = self.state(u) if U is None else U
+        return self._adjoint_gradient(u, U)
+
+    def reduced_hessian(self, U) -> np.ndarray:
+        """The exact (generalised) reduced Hessian ``S' H(U) S``, dense."""
+        S = self.apply_S(np.eye(self.m))
+        return S.T @ (self.dp.hessian(U) @ S)
+
+    def nonlinear(self, U) -> float:
+        parts = self.dp.energy_parts(U)
+        return parts["gao"] + parts["axial"] + parts["foundation"]
+
+
+class _T1(_Transform):
+    name = "T1"
+
+    def __init__(self, dp, control):
+        super().__init__(dp, control)
+        self.chol = dp._K_chol
+        n = dp.n
+        if control == "full":
+            self.B = sp.identity(n, format="csr")
+            self.unit = "N (load-vector entries)"
+            self.scale = dp.EI * dp.W / dp.L**3
+        else:
+            # Hat functions on the nodes: (u_h, v) for Hermite test functions v.
+            xq, wq, e = fem.gauss_points(dp.xi, 3)
+            hats = _hat_matrix(dp.xi, xq, e)
+            N = fem.eval_matrix(dp.xi, xq, 0, e)[:, dp.free]
+            self.B = (N.T @ sp.diags(wq) @ hats).tocsr()
+            if dp.scene.beam.supports == "P3":
+                # The thesis's end control r: a point force -r at the free end (1.114).
+                end = np.zeros((n, 1))
+                end[list(dp.free).index(2 * (dp.n_nodes - 1)), 0] = -1.0
+                self.B = sp.hstack([self.B, sp.csr_matrix(end)]).tocsr()
+            self.unit = "N/m"
+            self.scale = dp.EI * dp.W / dp.L**4
+        self.m = self.B.shape[1]
+        self.U0 = self.chol.solve(dp.f)  # w_hat = w(0)
+
+    def apply_S(self, u):
+        return self.chol.solve(self.B @ u)
+
+    def apply_ST(self, y):
+        return self.B.T @ self.chol.solve(y)
+
+    def _cost(self, u, U):
+        return 0.5 * (self.B @ u) @ (U - self.U0) + self.nonlinear(U)
+
+    def _adjoint_gradient(self, u, U):
+        p = self.chol.solve(0.5 * (self.B @ u) + self.dp.nonlinear_gradient(U))
+        return self.B.T @ (p + 0.5 * (U - self.U0))
+
+
+class _T2(_Transform):
+    name = "T2"
+
+    def __init__(self, dp, control):
+        super().__init__(dp, control)
+        xi = dp.xi
+        ne = len(xi) - 1
+        h = np.diff(xi)
+        self.h = h
+        # Continuous quadratic elements: vertex i -> 2i, midpoint of element e -> 2e + 1.
+        dofs = np.stack([2 * np.arange(ne), 2 * np.arange(ne) + 1, 2 * np.arange(ne) + 2], 1)
+        xq, wq, e = fem.gauss_points(xi, 3)
+        t = (xq - xi[e]) / h[e]
+        phi = np.stack([(1 - t) * (1 - 2 * t), 4 * t * (1 - t), t * (2 * t - 1)], 1)
+        dphi = np.stack([4 * t - 3, 4 - 8 * t, 4 * t - 1], 1) / h[e][:, None]
+        nz = 2 * ne + 1
+        rows = np.repeat(np.arange(len(xq)), 3)
+        cols = dofs[e].ravel()
+        P = sp.csr_matrix((phi.ravel(), (rows, cols)), shape=(len(xq), nz))
+        D = sp.csr_matrix((dphi.ravel(), (rows, cols)), shape=(len(xq), nz))
+        free = np.arange(1, nz)  # z(0) = 0
+        W = sp.diags(wq)
+        self.E = (D.T @ W @ D)[free][:, free].tocsr()
+        self.echol = BandedCholesky(self.E)
+        self.Gv = (P.T @ (wq * shear_load(dp, xq)))[free]
+        if control == "full":
+            self.Bz = sp.identity(len(free), format="csr")
+            self.unit = "N (load-vector entries)"
+        else:
+            self.Bz = (P.T @ W @ _hat_matrix(xi, xq, e))[free].tocsr()
+            self.unit = "N"
+        self.scale = dp.EI * dp.W / dp.L**3
+        self.m = self.Bz.shape[1]
+        # z -> Hermite DOFs: theta_i = z(x_i); w_{i+1} - w_i = h/6 (z_i + 4 z_mid + z_{i+1}).
+        self.A_lu, self.C = _z_to_hermite(dp, h)
+        self.z0 = self.echol.solve(self.Gv)
+        self.U0 = self.T(self.z0)
+
+    def T(self, z):
+        return self.A_lu.solve(np.asarray(self.C @ z))
+
+    def TT(self, y):
+        return self.C.T @ self.A_lu.solve(np.asarray(y), trans="T")
+
+    def apply_S(self, u):
+        return self.T(self.echol.solve(self.Bz @ u))
+
+    def apply_ST(self, y):
+        return self.Bz.T @ self.echol.solve(self.TT(y))
+
+    def _cost(self, u, U):
+        z = self.echol.solve(self.Gv + self.Bz @ u)
+        return 0.5 * (self.Bz @ u) @ (z - self.z0) + self.nonlinear(U)
+
+    def _adjoint_gradient(self, u, U):
+        z = self.echol.solve(self.Gv + self.Bz @ u)
+        p = self.echol.solve(0.5 * (self.Bz @ u) + self.TT(self.dp.nonlinear_gradient(U)))
+        return self.Bz.T @ (p + 0.5 * (z - self.z0))
+
+
+class _T3(_Transform):
+    name = "T3"
+
+    def __init__(self, dp, control):
+        super().__init__(dp, control)
+        xi = dp.xi
+        ne = len(xi) - 1
+        h = np.diff(xi)
+        # Discontinuous linear moments: [m_L(e), m_R(e)] per element.
+        xq, wq, e = fem.gauss_points(xi, 3)
+        t = (xq - xi[e]) / h[e]
+        rows = np.repeat(np.arange(len(xq)), 2)
+        cols = (2 * e[:, None] + np.arange(2)).ravel()
+        Pd = sp.csr_matrix((np.stack([1 - t, t], 1).ravel(), (rows, cols)), shape=(len(xq), 2 * ne))
+        self.Md = (Pd.T @ sp.diags(wq) @ Pd).tocsc()
+        # L2 projection of the load moment G onto discontinuous linears (exact for G
+        # piecewise quadratic or cubic needs more points: use 4).
+        xq4, wq4, e4 = fem.gauss_points(xi, 4)
+        t4 = (xq4 - xi[e4]) / h[e4]
+        rows4 = np.repeat(np.arange(len(xq4)), 2)
+        cols4 = (2 * e4[:, None] + np.arange(2)).ravel()
+        Pd4 = sp.csr_matrix((np.stack([1 - t4, t4], 1).ravel(), (rows4, cols4)),
+                            shape=(len(xq4), 2 * ne))
+        self.Md_lu = spla.splu(self.Md)
+        self.mG = self.Md_lu.solve(Pd4.T @ (wq4 * moment_load(dp, xq4)))
+        if control == "full":
+            self.Q = sp.identity(2 * ne, format="csr")
+        else:
+            # Continuous linear control vanishing at both ends (U_ad^0): nodal values 1..N-1.
+            r = np.concatenate([2 * np.arange(ne), 2 * np.arange(ne) + 1])
+            c = np.concatenate([np.arange(ne), np.arange(ne) + 1])
+            Q = sp.csr_matrix((np.ones(2 * ne), (r, c)), shape=(2 * ne, ne + 1))
+            self.Q = Q[:, 1:ne].tocsr()
+        self.unit = "N m"
+        self.scale = dp.EI * dp.W / dp.L**2
+        self.m = self.Q.shape[1]
+        self.A_lu, self.C = _moment_to_hermite(dp, h)
+        self.U0 = self.A_lu.solve(self.C @ self.mG)
+
+    def apply_S(self, u):
+        return self.A_lu.solve(np.asarray(self.C @ (self.Q @ u)))
+
+    def apply_ST(self, y):
+        return self.Q.T @ (self.C.T @ self.A_lu.solve(np.asarray(y), trans="T"))
+
+    def _cost(self, u, U):
+        ud = self.Q @ u
+        return 0.5 * ud @ (self.Md @ ud) + self.nonlinear(U)
+
+    def _adjoint_gradient(self, u, U):
+        # Adjoint state of the moment-deflection system, loaded by the nonlinear forces.
+        p = self.C.T @ self.A_lu.solve(self.dp.nonlinear_gradient(U), trans="T")
+        return self.Q.T @ (self.Md @ (self.Q @ u) + p)
+
+
+def _hat_matrix(xi, xq, e) -> sp.csr_matrix:
+    """Values of the nodal hat functions at quadrature points ``xq`` (element ``e``)."""
+    h = np.diff(xi)
+    t = (xq - xi[e]) / h[e]
+    rows = np.repeat(np.arange(len(xq)), 2)
+    cols = np.stack([e, e + 1], 1).ravel()
+    return sp.csr_matrix((np.stack([1 - t, t], 1).ravel(), (rows, cols)), shape=(len(xq), len(xi)))
+
+
+def _free_index(dp):
+    index = -np.ones(2 * dp.n_nodes, dtype=int)
+    index[dp.free] = np.arange(dp.n)
+    return index
+
+
+def _z_to_hermite(dp, h) -> sp.csr_matrix:
+    """Sparse system ``A U = C z`` from free quadratic z-DOFs to free Hermite DOFs (P3)."""
+    ne = len(h)
+    idx = _free_index(dp)
+    rows, cols, vals, crow, ccol, cval = [], [], [], [], [], []
+    r = 0
+    for i in range(1, ne + 1):  # theta_i = z(vertex i) = z-dof 2i (free index 2i - 1)
+        rows.append(r); cols.append(idx[2 * i + 1]); vals.append(1.0)
+        crow.append(r); ccol.append(2 * i - 1); cval.append(1.0)
+        r += 1
+    for e in range(ne):  # w_{e+1} - w_e = h/6 (z_e + 4 z_mid + z_{e+1})
+        rows.append(r); cols.append(idx[2 * (e + 1)]); vals.append(1.0)
+        if e > 0:
+            rows.append(r); cols.append(idx[2 * e]); vals.append(-1.0)
+        for k, wgt in ((2 * e, 1.0), (2 * e + 1, 4.0), (2 * e + 2, 1.0)):
+            if k > 0:
+                crow.append(r); ccol.append(k - 1); cval.append(h[e] * wgt / 6)
+        r += 1
+    A = sp.csc_matrix((vals, (rows, cols)), shape=(dp.n, dp.n))
+    C = sp.csr_matrix((cval, (crow, ccol)), shape=(dp.n, 2 * ne))
+    return spla.splu(A), C
+
+
+def _moment_to_hermite(dp, h):
+    """Sparse system ``A U = C m`` for ``w'' = -m`` (discontinuous linear m), P4 supports."""
+    ne = len(h)
+    idx = _free_index(dp)
+    rows, cols, vals, crow, ccol, cval = [], [], [], [], [], []
+
+    def put(r, dof, v):
+        if idx[dof] >= 0:
+            rows.append(r); cols.append(idx[dof]); vals.append(v)
+
+    for e in range(ne):
+        r = 2 * e  # theta_{e+1} - theta_e = -h (mL + mR) / 2
+        put(r, 2 * e + 3, 1.0); put(r, 2 * e + 1, -1.0)
+        crow += [r, r]; ccol += [2 * e, 2 * e + 1]; cval += [-h[e] / 2, -h[e] / 2]
+        r = 2 * e + 1  # w_{e+1} - w_e - h theta_e = -h^2 (2 mL + mR) / 6
+        put(r, 2 * e + 2, 1.0); put(r, 2 * e, -1.0); put(r, 2 * e + 1, -h[e])
+        crow += [r, r]; ccol += [2 * e, 2 * e + 1]; cval += [-h[e]**2 / 3, -h[e]**2 / 6]
+    A = sp.csc_matrix((vals, (rows, cols)), shape=(dp.n, dp.n))
+    C = sp.csr_matrix((cval, (crow, ccol)), shape=(dp.n, 2 * ne))
+    return spla.splu(A), C
+
+
+def make_transform(dp: DiscreteProblem, transform: str = "auto", control: str = "P1") -> _Transform:
+    """The CVM transform of a discrete scene.
+
+    Raises
+    ------
+    SceneError
+        For a transform that does not fit the supports, or a rigid obstacle.
+    """
+    supports = dp.scene.beam.supports
+    if dp.contact == "obstacle":
+        raise SceneError("solve.method", "cvm handles a deformable foundation or none, not a "
+                         "rigid obstacle; use \"convex\" or \"auto\"", "cvm")
+    name = AUTO[supports] if transform == "auto" else transform
+    if supports not in ALLOWED[name]:
+        raise SceneError("solve.transform", f"{name} is for supports "
+                         f"{', '.join(ALLOWED[name])}, not {supports}", transform)
+    return {"T1": _T1, "T2": _T2, "T3": _T3}[name](dp, control)
+
+
+# ------------------------------------------------------------------ minimisers
+def _box_gap(tr, u, g, C, bounded):
+    """Frank-Wolfe gap g'(u - s), s the box vertex minimising g's (>= I(u) - I*)."""
+    s = np.where(bounded, -C * np.sign(g), u)
+    return float(g @ (u - s)), s
+
+
+def conditional_gradient(tr, u, C, bounded, tol, max_iter):
+    """The thesis's conditional gradient method, with an exact line search.
+
+    Stops when the Frank-Wolfe gap ``g'(u - s)``, an upper bound of
+    ``I(u) - min I``, falls below ``tol * |I(u)|``.  The gap scales with C,
+    so a generous bound makes this test strict (and the method slow).
+    """
+    dp = tr.dp
+    U = tr.state(u)
+    scale = max(abs(tr.cost(u, U)), 1e-300)
+    for it in range(1, max_iter + 1):
+        g = tr.gradient(u, U)
+        gap, s = _box_gap(tr, u, g, C, bounded)
+        if gap <= tol * scale:
+            return u, it - 1, True, gap / scale
+        d = s - u
+        # J = Pi(U(u)) + const with U affine: search along U + gamma S d,
+        # phi'(gamma) = grad Pi(U + gamma Sd)' Sd, without further state solves.
+        Sd = tr.apply_S(d)
+        gamma = _root_in_unit(lambda t: float(dp.gradient(U + t * Sd) @ Sd), float(g @ d))
+        u = u + gamma * d
+        U = U + gamma * Sd
+    gap, _ = _box_gap(tr, u, tr.gradient(u, U), C, bounded)
+    return u, max_iter, gap <= tol * scale, gap / scale
+
+
+def _root_in_unit(dphi, d0, iters=40, rtol=1e-8):
+    """argmin of a convex phi on [0, 1] from its derivative (``d0 = phi'(0) < 0``).
+
+    Illinois (modified regula falsi) on the increasing phi'; stops when
+    ``|phi'| <= rtol |phi'(0)|`` or the bracket is below round-off.
+    """
+    d1 = dphi(1.0)
+    if d1 <= 0:
+        return 1.0
+    lo, hi, flo, fhi = 0.0, 1.0, d0, d1
+    side = 0
+    for _ in range(iters):
+        t = (lo * fhi - hi * flo) / (fhi - flo)
+        if not lo < t < hi:
+            t = 0.5 * (lo + hi)
+        ft = dphi(t)
+        if abs(ft) <= rtol * abs(d0) or hi - lo <= 1e-13:
+            return t
+        if ft < 0:
+            lo, flo = t, ft
+            if side == -1:
+                fhi *= 0.5
+            side = -1
+        else:
+            hi, fhi = t, ft
+            if side == 1:
+                flo *= 0.5
+            side = 1
+    return 0.5 * (lo + hi)
+
+
+def projected_newton(tr, u, C, bounded, tol, max_iter):
+    """Bertsekas's projected Newton method on the box, with the exact reduced Hessian.
+
+    The optimality test is the reduced Newton decrement on the free variables
+    together with the sign condition of the gradient on the variables held at
+    their bounds.
+    """
+    lo = np.where(bounded, -C, -np.inf)
+    hi = np.where(bounded, C, np.inf)
+    measure = math.inf
+    for it in range(1, max_iter + 1):
+        U = tr.state(u)
+        g = tr.gradient(u, U)
+        eps = min(1e-8 * C, float(np.linalg.norm(u - np.clip(u - g, lo, hi))))
+        held = ((u <= lo + eps) & (g > 0)) | ((u >= hi - eps) & (g < 0))
+        free = ~held
+        H = tr.reduced_hessian(U)
+        d = np.zeros_like(u)
+        Hf = H[np.ix_(free, free)]
+        try:
+            L = np.linalg.cholesky(Hf)
+        except np.linalg.LinAlgError:
+            Hf = Hf + 1e-12 * np.trace(Hf) / max(len(Hf), 1) * np.eye(len(Hf))
+            L = np.linalg.cholesky(Hf)
+        d[free] = -_cho(L, g[free])
+        dec2 = float(-(g[free] @ d[free]))
+        total = abs(tr.cost(u, U)) or 1.0
+        measure = math.sqrt(max(dec2, 0.0) / total)
+        if measure <= tol:
+            return u, it - 1, True, measure
+        # Projected search along the arc u(t) = P(u + t d); held variables
+        # move along -g scaled by the Hessian's diagonal.
+        if held.any():
+            d[held] = -g[held] / np.maximum(np.diag(H)[held], 1e-300)
+        cost0 = tr.cost(u, U)
+        t = 1.0
+        for _ in range(50):
+            trial = np.clip(u + t * d, lo, hi)
+            # Armijo along the projection arc; once the decrement is tiny the cost
+            # change is below round-off and the (locally quadratic) step is taken.
+            if measure < 1e-6 or tr.cost(trial) <= cost0 + 1e-4 * float(g @ (trial - u)):
+                break
+            t *= 0.5
+        else:
+            return u, it, False, measure
+        u = trial
+    return u, max_iter, measure <= tol, measure
+
+
+def _cho(L, b):
+    import scipy.linalg as sla
+    return sla.cho_solve((L, True), b)
+
+
+# ------------------------------------------------------------------ driver
+def _default_bound(dp, tr) -> float:
+    """A starting bound, in non-dimensional control units, far above the optimum.
+
+    The controls replace the nonlinear forces; with the deflection scaled to
+    about 1, those are bounded by the coefficients of the scene.
+    """
+    return 100.0 * (1.0 + abs(dp.p) + dp.a + dp.c * (1.0 + abs(dp.g)) + np.abs(dp.f).max(initial=0)
+                    * len(dp.x))
+
+
+def solve_cvm(dp: DiscreteProblem, transform: str = "auto", control: str = "P1",
+              minimizer: str = "projected-newton", bound: float | None = None,
+              tol: float | None = None, max_iter: int | None = None) -> dict:
+    """Solve a discrete scene by the control variational method.
+
+    Parameters
+    ----------
+    dp : DiscreteProblem
+    transform : {"auto", "T1", "T2", "T3"}
+    control : {"P1", "full"}
+    minimizer : {"projected-newton", "conditional-gradient"}
+    bound : float, optional
+        The control bound C in the control's physical units (see the result's
+        ``cvm.bound_unit``).  By default C starts far above the optimum and is
+        raised tenfold, up to 6 times, while it is active at the optimum.
+    tol : float, optional
+        Tolerance of the minimiser's own optimality test.
+    max_iter : int, optional
+
+    Returns
+    -------
+    dict
+        The raw result (``u`` Hermite DOFs, status, ...) with ``cvm`` details.
+    """
+    t0 = time.perf_counter()
+    tr = make_transform(dp, transform, control)
+    newton = minimizer == "projected-newton"
+    tol = tol if tol is not None else (1e-10 if newton else 1e-9)
+    max_iter = max_iter if max_iter is not None else (50 if newton else 2000)
+    bounded = np.ones(tr.m, dtype=bool)
+    adapt = bound is None
+    C = _default_bound(dp, tr) if adapt else bound / tr.scale
+    u = np.zeros(tr.m)
+    total_iter = 0
+    for _ in range(7):
+        run = projected_newton if newton else conditional_gradient
+        u, nit, ok, measure = run(tr, u, C, bounded, tol, max_iter)
+        total_iter += nit
+        active = bool(np.any(np.abs(u) >= C * (1 - 1e-9)))
+        if not (adapt and active):
+            break
+        C *= 10.0
+    U = tr.state(u)
+    residual = dp.residual(U)
+    status = "optimal" if ok else "inaccurate"
+    message = (f"cvm {tr.name}/{control} {minimizer}: "
+               + ("optimality test passed" if ok else "optimality test NOT passed")
+               + f" (measure {measure:.2e}, tol {tol:.0e}, {total_iter} iterations)")
+    if active:
+        message += "; the control bound C is active at the optimum"
+    return {
+        "u": U, "lam": None, "status": status, "message": message, "residual": residual,
+        "nit": total_iter, "solver": minimizer, "solve_time": time.perf_counter() - t0,
+        "cvm": {
+            "transform": tr.name, "control": control, "minimizer": minimizer,
+            "iterations": total_iter, "control_bound_active": active,
+            "bound": C * tr.scale, "bound_unit": tr.unit, "optimality_measure": measure,
+            "controls": len(u),
+        },
+        "control_values": u,
+    }
