@@ -98,6 +98,36 @@ def _cmd_solve(args) -> int:
     return worst
 
 
+def _cmd_verify(args) -> int:
+    from .scene import load_scene
+    from .verify import read_result_csv, verify
+
+    scene = load_scene(args.scene, _overrides(args.set))
+    x, w, slope = read_result_csv(args.result)
+    report = verify(scene, x, w, slope, reference_elements=args.reference_elements,
+                    key=args.result)
+    report = {"scene": args.scene, "result": args.result, **report}
+    ok = report["reference"]["status"] == "optimal"
+    if args.json:
+        print(_dumps(report))
+    else:
+        print(f"result        {args.result} ({report['nodes']} nodes, {report['interpolant']})")
+        print(f"energy        {report['energy']:.8g} J (ground truth {report['energy_reference']:.8g} J"
+              f", {report['reference']['elements']} elements, {report['reference']['method']})")
+        print(f"energy gap    {report['energy_gap']:.4g} J (relative {report['energy_gap_rel']:.3g})")
+        print(f"max |w error| {report['max_error']:.4g} m (relative {report['max_error_rel']:.3g})"
+              f" at x = {report['max_error_x']:.6g} m")
+        if report["boundary_violation"] > 1e-9:
+            print(f"note          support conditions violated by {report['boundary_violation']:.3g}"
+                  " (relative to max |w|)")
+        if report.get("penetration"):
+            print(f"note          penetrates the obstacle by {report['penetration']:.4g} m")
+    if not ok:
+        print(f"error: {args.scene}: ground truth not certified ({report['reference']['status']})",
+              file=sys.stderr)
+    return EXIT_OK if ok else EXIT_SOLVER
+
+
 def _cmd_report(args) -> int:
     from .report import thesis_markdown, thesis_rows
 
@@ -129,7 +159,7 @@ def _build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("solve", help="solve one or more scene files")
     p.add_argument("scenes", nargs="+", metavar="SCENE", help="scene file(s) (TOML)")
-    p.add_argument("--method", help="auto | convex | newton (overrides solve.method)")
+    p.add_argument("--method", help="auto | convex | newton | cvm (overrides solve.method)")
     p.add_argument("--solver", help="clarabel | osqp (convex method; overrides solve.solver)")
     p.add_argument("--elements", type=int, help="number of elements (overrides mesh.elements)")
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
@@ -137,6 +167,16 @@ def _build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="JSON (Lines) on stdout")
     p.add_argument("--plot", metavar="FILE", help="write a picture of the deflection (PNG/SVG)")
     p.set_defaults(func=_cmd_solve)
+
+    p = sub.add_parser("verify", help="score a computed deflection (CSV: x, w[, slope]) "
+                       "against the ground truth")
+    p.add_argument("scene", metavar="SCENE", help="the scene the result claims to solve")
+    p.add_argument("result", metavar="RESULT.csv", help="columns x, w and optionally slope")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a scene value")
+    p.add_argument("--reference-elements", type=int, default=1024, metavar="N",
+                   help="elements of the ground-truth mesh (default 1024)")
+    p.add_argument("--json", action="store_true", help="JSON on stdout")
+    p.set_defaults(func=_cmd_verify)
 
     p = sub.add_parser("report", help="reproduce the thesis's published cases side by side")
     p.add_argument("which", choices=["thesis"], help="the report to make")
