@@ -227,7 +227,14 @@ class _T2(_Transform):
         W = sp.diags(wq)
         self.E = (D.T @ W @ D)[free][:, free].tocsr()
         self.echol = BandedCholesky(self.E)
-        self.Gv = (P.T @ (wq * shear_load(dp, xq)))[free]
+        # (G, phi): G is piecewise quadratic with kinks at the load table's knots,
+        # which may lie inside elements: split there for an exact integral.
+        xg, wg, eg = fem.gauss_points_split(xi, _load_knots(dp), 3)
+        tg = (xg - xi[eg]) / h[eg]
+        phig = np.stack([(1 - tg) * (1 - 2 * tg), 4 * tg * (1 - tg), tg * (2 * tg - 1)], 1)
+        Pg = sp.csr_matrix((phig.ravel(), (np.repeat(np.arange(len(xg)), 3), dofs[eg].ravel())),
+                           shape=(len(xg), nz))
+        self.Gv = (Pg.T @ (wg * shear_load(dp, xg)))[free]
         if control == "full":
             self.Bz = sp.identity(len(free), format="csr")
             self.unit = "N (load-vector entries)"
@@ -278,9 +285,9 @@ class _T3(_Transform):
         cols = (2 * e[:, None] + np.arange(2)).ravel()
         Pd = sp.csr_matrix((np.stack([1 - t, t], 1).ravel(), (rows, cols)), shape=(len(xq), 2 * ne))
         self.Md = (Pd.T @ sp.diags(wq) @ Pd).tocsc()
-        # L2 projection of the load moment G onto discontinuous linears (exact for G
-        # piecewise quadratic or cubic needs more points: use 4).
-        xq4, wq4, e4 = fem.gauss_points(xi, 4)
+        # L2 projection of the load moment G onto discontinuous linears: G is
+        # piecewise cubic with knots at the load table's, possibly inside elements.
+        xq4, wq4, e4 = fem.gauss_points_split(xi, _load_knots(dp), 3)
         t4 = (xq4 - xi[e4]) / h[e4]
         rows4 = np.repeat(np.arange(len(xq4)), 2)
         cols4 = (2 * e4[:, None] + np.arange(2)).ravel()
@@ -316,6 +323,11 @@ class _T3(_Transform):
         # Adjoint state of the moment-deflection system, loaded by the nonlinear forces.
         p = self.C.T @ self.A_lu.solve(self.dp.nonlinear_gradient(U), trans="T")
         return self.Q.T @ (self.Md @ (self.Q @ u) + p)
+
+
+def _load_knots(dp) -> np.ndarray:
+    """The load table's knots (non-dimensional); empty for a uniform load or none."""
+    return np.empty(0) if dp.q_table is None else dp.q_table[:, 0]
 
 
 def _hat_matrix(xi, xq, e) -> sp.csr_matrix:

@@ -27,7 +27,8 @@ import scipy.sparse as sp
 
 __all__ = [
     "uniform_nodes_with_points", "stiffness_matrix", "geometric_matrix", "load_vector",
-    "point_load_vector", "eval_matrix", "gauss_points", "shape_functions", "element_of",
+    "point_load_vector", "eval_matrix", "gauss_points", "gauss_points_split", "shape_functions",
+    "element_of",
     "free_dofs",
 ]
 
@@ -144,6 +145,26 @@ def gauss_points(x, n: int):
     return xq, wq, elem
 
 
+def gauss_points_split(x, breaks, n: int):
+    """Gauss points on every element, each element split at the ``breaks`` inside it.
+
+    Exact integration of functions that are polynomial between the nodes and
+    the breaks (e.g. a piecewise-linear load table's knots inside elements).
+
+    Returns
+    -------
+    xq, wq : ndarray
+    elem : ndarray of int, the element of each point
+    """
+    x = np.asarray(x, float)
+    breaks = np.asarray(breaks, float).ravel()
+    inner = breaks[(breaks > x[0]) & (breaks < x[-1])]
+    cuts = np.union1d(x, inner)
+    xq, wq, piece = gauss_points(cuts, n)
+    elem = element_of(x, 0.5 * (cuts[:-1] + cuts[1:]))[piece]
+    return xq, wq, elem
+
+
 def shape_functions(t, h, deriv: int = 0) -> np.ndarray:
     """Hermite shape functions (or their x-derivatives) at local t in [0, 1].
 
@@ -198,16 +219,13 @@ def load_vector(x, q) -> np.ndarray:
     if q is None:
         return f
     if np.isscalar(q):
-        cuts = x
+        breaks = ()
         qfun = lambda s: np.full_like(s, float(q))  # noqa: E731
     else:
         table = np.asarray(q, float)
-        inner = table[:, 0][(table[:, 0] > x[0]) & (table[:, 0] < x[-1])]
-        cuts = np.union1d(x, inner)
+        breaks = table[:, 0]
         qfun = lambda s: np.interp(s, table[:, 0], table[:, 1], left=0.0, right=0.0)  # noqa: E731
-    xq, wq, piece = gauss_points(cuts, 3)
-    mid = 0.5 * (cuts[:-1] + cuts[1:])
-    e = element_of(x, mid)[piece]
+    xq, wq, e = gauss_points_split(x, breaks, 3)
     h = x[e + 1] - x[e]
     vals = shape_functions((xq - x[e]) / h, h, 0) * (wq * qfun(xq))[:, None]
     np.add.at(f, (2 * e[:, None] + np.arange(4)[None, :]).ravel(), vals.ravel())

@@ -134,3 +134,14 @@ def test_cvm_scene_validation():
         cvm(scene_for("P1", False), control="P2")
     with pytest.raises(SceneError, match="^solve.bound"):
         cvm(scene_for("P1", False), bound=-1.0)
+
+
+@pytest.mark.parametrize("supports, transform", [("P3", "T2"), ("P4", "T3"), ("P2", "T1")])
+@pytest.mark.parametrize("q", [[[0.0, 0.0], [0.37, -2e8], [1.0, 1e6]],   # knot inside an element
+                               [[0.33, -2e7], [0.61, -4e7]]])             # jumps at both ends
+def test_full_control_with_table_knots_inside_elements(supports, transform, q):
+    """The transformed loads are integrated exactly across the table's knots."""
+    d = scene_dict(supports, "euler-bernoulli", q=q, elements=8, axial=-1e8)
+    r = cvm(d, transform, "full")
+    truth = solve(Scene.from_dict(d), "newton")
+    assert np.abs(r.w - truth.w).max() <= 1e-9 * np.abs(truth.w).max()
