@@ -1,0 +1,265 @@
+"""The well-conditioned form of the discrete energy: deflections, slopes and chord slopes.
+
+With the nodal DOFs (w_i, theta_i) the curvature on an element is a second
+difference of deflections, ``(6 - 12t)(w_{i+1} - w_i)/h^2 + ...``: evaluating
+the energy or its gradient cancels terms of size N^3 and the stiffness matrix
+has condition number ~N^4, so beyond about 2000 elements no solver working in
+double precision can certify an answer.
+
+Here every element also carries its chord slope ``D_e = (w_{e+1} - w_e)/h_e``
+as a variable, tied to the deflections by the sparse linear constraint
+``w_{e+1} - w_e - h_e D_e = 0``.  On element e (local t in [0, 1])::
+
+    w   = w_e + h (3t^2 - 2t^3) D_e + h (t - 2t^2 + t^3) th_e + h (t^3 - t^2) th_{e+1}
+    w'  = (6t - 6t^2) D_e + (1 - 4t + 3t^2) th_e + (3t^2 - 2t) th_{e+1}
+    w'' = ((6 - 12t) D_e + (6t - 4) th_e + (6t - 2) th_{e+1}) / h
+
+Only first differences remain.  This is the same Hermite space (an exact
+re-parametrisation), so the minimiser is the same; what changes is the
+round-off: energies and gradients lose ~N eps instead of ~N^3 eps.
+
+Variables ``z`` are ordered per node ``[w_i, th_i, D_i]`` (the last node has
+no D); Newton solves the saddle-point (KKT) system of the linking constraint,
+which is banded in the ordering ``[w_i, th_i, D_i, lambda_i]``.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from . import fem
+from .discrete import CONTACT_POINTS, GAO_POINTS, DiscreteProblem
+
+__all__ = ["MixedForm"]
+
+# Fixed DOFs per support, as (w_0, theta_0, w_N, theta_N).
+_FIXED = {"P1": (1, 1, 1, 1), "P2": (1, 1, 1, 0), "P3": (1, 1, 0, 0), "P4": (1, 0, 1, 0)}
+
+
+def _rows(x, pts, elem, kind):
+    """Sparse rows giving w (kind 0), w' (1) or w'' (2) at ``pts`` from the full z vector."""
+    h = np.diff(x)[elem]
+    t = (pts - x[elem]) / h
+    w_i, th_i, d_i, th_j = 3 * elem, 3 * elem + 1, 3 * elem + 2, 3 * elem + 4
+    if kind == 0:
+        cols = [w_i, d_i, th_i, th_j]
+        vals = [np.ones_like(t), h * (3 * t**2 - 2 * t**3), h * (t - 2 * t**2 + t**3),
+                h * (t**3 - t**2)]
+    elif kind == 1:
+        cols = [d_i, th_i, th_j]
+        vals = [6 * t - 6 * t**2, 1 - 4 * t + 3 * t**2, 3 * t**2 - 2 * t]
+    else:
+        cols = [d_i, th_i, th_j]
+        vals = [(6 - 12 * t) / h, (6 * t - 4) / h, (6 * t - 2) / h]
+    n = len(pts)
+    rows = np.tile(np.arange(n), len(cols))
+    return rows, np.concatenate(cols), np.concatenate(vals), n
+
+
+class MixedForm:
+    """The energy of a :class:`DiscreteProblem` in the variables (w, theta, D).
+
+    Parameters
+    ----------
+    dp : DiscreteProblem
+        Provides the mesh, the scaling and the coefficients.
+    """
+
+    def __init__(self, dp: DiscreteProblem):
+        self.dp = dp
+        x = dp.xi
+        N = len(x) - 1
+        self.N = N
+        self.nz = 3 * N + 2
+        fw0, ft0, fwN, ftN = _FIXED[dp.scene.beam.supports]
+        fixed = [i for i, f in zip((0, 1, 3 * N, 3 * N + 1), (fw0, ft0, fwN, ftN)) if f]
+        mask = np.ones(self.nz, dtype=bool)
+        mask[fixed] = False
+        self.free = np.flatnonzero(mask)
+        self.n = len(self.free)
+
+        def matrix(pts, elem, kind):
+            r, c, v, n = _rows(x, pts, elem, kind)
+            return sp.csr_matrix((v, (r, c)), shape=(n, self.nz))[:, self.free].tocsr()
+
+        xq, self.wq2, e = fem.gauss_points(x, 2)
+        self.B2 = matrix(xq, e, 2)
+        self.B2T = self.B2.T.tocsr()
+        self.has_slope = dp.needs_gao or dp.p != 0
+        if self.has_slope:
+            xq, self.wq5, e = fem.gauss_points(x, GAO_POINTS)
+            self.B1 = matrix(xq, e, 1)
+            self.B1T = self.B1.T.tocsr()
+        if dp.contact is not None:
+            xq, self.wqc, e = fem.gauss_points(x, CONTACT_POINTS)
+            self.Nq = matrix(xq, e, 0)
+            self.NqT = self.Nq.T.tocsr()
+        if dp.contact == "obstacle":
+            # w >= g at the nodes (the variables w_i themselves) and at the Gauss
+            # points, as the convex program; rows that touch no free DOF are dropped.
+            nodes = sp.csr_matrix((np.ones(N + 1), (np.arange(N + 1), 3 * np.arange(N + 1))),
+                                  shape=(N + 1, self.nz))[:, self.free]
+            A = sp.vstack([nodes, self.Nq]).tocsr()
+            keep = np.flatnonzero(np.diff(A.indptr) > 0)
+            pts = np.concatenate([x, xq])
+            self.A = A[keep]
+            self.AT = self.A.T.tocsr()
+            self.con_points = pts[keep]
+            # The same rows on the full Hermite DOFs: multipliers -> consistent nodal forces.
+            self.A_hermite = sp.vstack([fem.eval_matrix(x, x, 0),
+                                        fem.eval_matrix(x, xq, 0, e)]).tocsr()[keep]
+        # Linking constraint rows: w_{e+1} - w_e - h_e D_e = 0.
+        h = np.diff(x)
+        e = np.arange(N)
+        rows = np.repeat(e, 3)
+        cols = np.stack([3 * e + 3, 3 * e, 3 * e + 2], 1).ravel()
+        vals = np.stack([np.ones(N), -np.ones(N), -h], 1).ravel()
+        self.C = sp.csr_matrix((vals, (rows, cols)), shape=(N, self.nz))[:, self.free].tocsr()
+        # Load: the Hermite load vector acts on (w_i, theta_i).
+        F = np.zeros(2 * dp.n_nodes)
+        F[dp.free] = dp.f
+        fz = np.zeros(self.nz)
+        fz[0::3] = F[0::2]
+        fz[1::3] = F[1::2]
+        self.f = fz[self.free]
+        self._order = self._kkt_order()
+
+    # ---------------------------------------------------------------- conversion
+    def to_hermite(self, z) -> np.ndarray:
+        """Free Hermite DOFs (w_i, theta_i) of ``z``."""
+        full = np.zeros(self.nz)
+        full[self.free] = z
+        u = np.empty(2 * (self.N + 1))
+        u[0::2] = full[0::3]
+        u[1::2] = full[1::3]
+        return u[self.dp.free]
+
+    def from_hermite(self, u) -> np.ndarray:
+        """``z`` from free Hermite DOFs (chord slopes by differences: for warm starts)."""
+        full_u = self.dp.full(u)
+        z = np.zeros(self.nz)
+        z[0::3] = full_u[0::2]
+        z[1::3] = full_u[1::2]
+        z[2::3] = np.diff(full_u[0::2]) / np.diff(self.dp.xi)
+        return z[self.free]
+
+    # ---------------------------------------------------------------- energy
+    def energy(self, z) -> float:
+        dp = self.dp
+        e = 0.5 * (self.wq2 @ (self.B2 @ z) ** 2) - self.f @ z
+        if self.has_slope:
+            s = self.B1 @ z
+            e += dp.a / 12.0 * (self.wq5 @ s**4) - 0.5 * dp.p * (self.wq5 @ s**2)
+        if dp.contact == "foundation":
+            pen = np.maximum(dp.g - self.Nq @ z, 0.0)
+            e += 0.5 * dp.c * (self.wqc @ pen**2)
+        return float(e)
+
+    def gradient(self, z, shift=None, rho=0.0, active=None) -> np.ndarray:
+        """Gradient; with ``shift``/``rho``, of the obstacle's augmented Lagrangian too.
+
+        ``active`` = (foundation mask, obstacle mask) linearises the contact
+        forces on those points, ``c (g - w)`` instead of ``c (g - w)^+``: the
+        model of a semismooth Newton step with a predicted active set.
+        """
+        dp = self.dp
+        g = self.B2T @ (self.wq2 * (self.B2 @ z)) - self.f
+        if self.has_slope:
+            s = self.B1 @ z
+            g += self.B1T @ (self.wq5 * (dp.a / 3.0 * s**3 - dp.p * s))
+        if dp.contact == "foundation":
+            pen = dp.g - self.Nq @ z
+            pen = np.maximum(pen, 0.0) if active is None else pen * active[0]
+            g -= dp.c * (self.NqT @ (self.wqc * pen))
+        if shift is not None:
+            force = shift + rho * (dp.g - self.A @ z)
+            force = np.maximum(force, 0.0) if active is None else force * active[1]
+            g -= self.AT @ force
+        return g
+
+    def active_sets(self, z, shift=None, rho=0.0):
+        """Where the contact terms act at ``z``: (foundation mask, obstacle mask)."""
+        dp = self.dp
+        found = (dp.g - self.Nq @ z) > 0 if dp.contact == "foundation" else None
+        obst = (shift + rho * (dp.g - self.A @ z)) > 0 if shift is not None else None
+        return found, obst
+
+    def hessian(self, z, shift=None, rho=0.0, active=None) -> sp.csr_matrix:
+        """Generalised Hessian at ``z`` (contact terms on ``active``, default: where they act)."""
+        dp = self.dp
+        H = self.B2T @ sp.diags(self.wq2) @ self.B2
+        if self.has_slope:
+            s = self.B1 @ z
+            H = H + self.B1T @ sp.diags(self.wq5 * (dp.a * s**2 - dp.p)) @ self.B1
+        found, obst = self.active_sets(z, shift, rho) if active is None else active
+        if found is not None:
+            H = H + self.NqT @ sp.diags(dp.c * self.wqc * found) @ self.Nq
+        if obst is not None:
+            H = H + self.AT @ sp.diags(rho * obst.astype(float)) @ self.A
+        return H.tocsr()
+
+    # ---------------------------------------------------------------- KKT solves
+    def _kkt_order(self):
+        """Permutation interleaving each multiplier after its element's D (banded KKT)."""
+        full_pos = np.full(self.nz, -1)
+        full_pos[self.free] = np.arange(self.n)
+        key_z = self.free.astype(float)                     # z variables in node order
+        key_l = 3 * np.arange(self.N) + 2.5                 # multiplier e right after D_e
+        keys = np.concatenate([key_z, key_l])
+        return np.argsort(keys, kind="stable")
+
+    def kkt_solve(self, H, rhs_z, rhs_c) -> tuple[np.ndarray, np.ndarray]:
+        """Solve ``[[H, C'], [C, 0]] [d; mu] = [rhs_z; rhs_c]`` as a banded system."""
+        K = sp.bmat([[H, self.C.T], [self.C, None]], format="coo")
+        p = self._order
+        inv = np.empty_like(p)
+        inv[p] = np.arange(len(p))
+        r, c = inv[K.row], inv[K.col]
+        lo, up = int(np.max(r - c, initial=0)), int(np.max(c - r, initial=0))
+        ab = np.zeros((lo + up + 1, len(p)))
+        np.add.at(ab, (up + r - c, c), K.data)
+        b = np.concatenate([rhs_z, rhs_c])[p]
+        sol = np.empty(len(p))
+        sol[p] = sla.solve_banded((lo, up), ab, b, check_finite=False)
+        return sol[: self.n], sol[self.n:]
+
+    @functools.cached_property
+    def load_scale(self) -> float:
+        """Energy norm of the load, sqrt(f' H0^-1 f) on the constraint manifold.
+
+        H0 is the bending and axial part; its value is the size of the answer
+        of the linear problem, a scale that does not vanish with the solution
+        (a beam resting on a gap-0 obstacle has w = 0).
+        """
+        z0 = np.zeros(self.n)
+        H0 = self.B2T @ sp.diags(self.wq2) @ self.B2
+        if self.has_slope and self.dp.p:
+            H0 = H0 - self.dp.p * (self.B1T @ sp.diags(self.wq5) @ self.B1)
+        d, _ = self.kkt_solve(H0.tocsr(), self.f, self.C @ z0)
+        return math.sqrt(max(float(self.f @ d), 0.0))
+
+    def scale(self, z, H) -> float:
+        """The size of the problem: the solution's energy norm or the load's; 1 without load."""
+        load = self.load_scale
+        if load == 0:
+            return 1.0
+        return max(math.sqrt(max(float(z @ (H @ z)), 0.0)), load)
+
+    def decrement(self, z, H=None, g=None, **al) -> tuple[float, np.ndarray]:
+        """Relative Newton decrement on the constraint manifold, and the Newton step.
+
+        Inside the method of multipliers (``al`` given) the scale is the load's
+        energy norm: the penalty's rho ||A z||^2 in z' H z is no measure of the
+        problem's size.
+        """
+        g = self.gradient(z, **al) if g is None else g
+        H = self.hessian(z, **al) if H is None else H
+        d, _ = self.kkt_solve(H, -g, -(self.C @ z))
+        dec2 = max(float(d @ (H @ d)), 0.0)
+        scale = (self.load_scale or 1.0) if al else self.scale(z, H)
+        return math.sqrt(dec2) / scale, d
