@@ -1,14 +1,22 @@
-"""Damped (semismooth) Newton method for the discrete energy.
+"""Damped (semismooth) Newton method for the discrete energy, every scene kind.
 
 The energy of a scene below P_bar_h is strictly convex.  Without contact and
-without the Gao term it is quadratic, and one banded Cholesky solve is the
-whole answer.  With the Gao term it is smooth, and with a deformable
-foundation its gradient is semismooth (the positive part), so a Newton method
-with the generalised Hessian and a backtracking line search on the energy is
-globally convergent and ends in a handful of O(N) iterations.
+without the Gao term it is quadratic, and one solve is the whole answer.  With
+the Gao term it is smooth, and with a deformable foundation its gradient is
+semismooth (the positive part), so Newton's method with the generalised
+Hessian and a line search is globally convergent and ends in a handful of O(N)
+iterations.  A rigid obstacle is handled by the method of multipliers
+(augmented Lagrangian): each inner problem is exactly a foundation problem
+(a positive-part penalty shifted by the multipliers), solved by the same
+semismooth Newton method, and the multipliers are updated until the obstacle
+is respected to round-off.  Unlike a primal-dual active-set method this does
+not need linearly independent active constraints, which a beam lying flat on
+the obstacle does not have.
 
-The stopping test is the relative Newton decrement ``sqrt(g' H^-1 g) /
-sqrt(u' H u)``, the same measure the convex solver is checked with.
+All of it runs on :class:`~gaocvx.mixed.MixedForm`, the well-conditioned
+variables (w, theta, chord slope), with banded KKT solves.  The stopping test
+is the relative Newton decrement, the same measure the convex solver is
+certified with.
 """
 
 from __future__ import annotations
@@ -18,89 +26,165 @@ import time
 
 import numpy as np
 
-from .discrete import STATIONARITY_TOL, DiscreteProblem
-from .linalg import BandedCholesky, NotPositiveDefinite
+from .discrete import (COMPLEMENTARITY_TOL, FEASIBILITY_TOL, STATIONARITY_TOL, DiscreteProblem,
+                       complementarity)
+from .mixed import MixedForm
 
-__all__ = ["solve_newton"]
+__all__ = ["solve_newton", "certify"]
 
 TOL = 1e-10
 MAX_ITER = 100
-FULL_STEP = 1e-5   # relative decrement below which full Newton steps are taken
+ROUNDOFF = 1e-9    # a decrement that stops falling below this is round-off
+MAX_OUTER = 40     # multiplier updates for the obstacle
+# A multiplier update moves lambda by rho * (g - A z); with A z known to ~1e-13
+# (round-off), rho beyond ~1e10 turns round-off into multiplier noise.
+RHO_CAP = 1e10
 
 
-def solve_newton(dp: DiscreteProblem, u0=None, tol: float = TOL, max_iter: int = MAX_ITER) -> dict:
-    """Minimise the discrete energy of ``dp`` (no obstacle) by damped Newton.
+def solve_newton(dp: DiscreteProblem, warm: dict | None = None, tol: float = TOL,
+                 max_iter: int = MAX_ITER) -> dict:
+    """Minimise the discrete energy of ``dp`` by damped (semismooth) Newton.
 
     Parameters
     ----------
     dp : DiscreteProblem
-    u0 : ndarray, optional
-        Warm start (free DOFs); zero by default.
+    warm : dict, optional
+        ``{"z": ..., "lam": ...}`` from an earlier solve of a similar scene on
+        the same mesh (see the ``warm`` entry of the returned dict).
     tol : float
         Relative Newton decrement at which to stop.
     max_iter : int
+        Newton iterations (in total, for the obstacle).
 
     Returns
     -------
     dict
-        ``u``, ``lam`` (None), ``status``, ``message``, ``residual``, ``nit``,
-        ``solver``, ``solve_time``.
+        ``u`` (free Hermite DOFs), ``lam`` (obstacle multipliers or None),
+        ``status``, ``message``, ``residual``, ``nit``, ``solver``,
+        ``solve_time`` and ``warm``.
     """
-    if dp.contact == "obstacle":
-        raise ValueError("solve_newton handles scenes without a rigid obstacle")
     t0 = time.perf_counter()
-    u = np.zeros(dp.n) if u0 is None else np.array(u0, float)
-    if dp.is_quadratic:
-        # One solve with the factor that is needed anyway; no iteration.
-        u = dp.quadratic_factor.solve(dp.f)
-        return _out(u, dp, 1, t0, "one banded Cholesky solve (quadratic energy)")
+    mf = MixedForm(dp)
+    z = np.zeros(mf.n)
+    if warm is not None and len(warm.get("z", ())) == mf.n:
+        z = np.array(warm["z"], float)
+    if dp.n == 0:
+        return _finish(mf, z, None, 0, t0, "no free degrees of freedom: w = 0")
+    if dp.contact != "obstacle":
+        z, nit, note = _newton(mf, z, tol, max_iter, {})
+        return _finish(mf, z, None, nit, t0, note)
 
-    decrement = previous = math.inf
-    for it in range(1, max_iter + 1):
-        g = dp.gradient(u)
-        H = dp.hessian(u)
-        try:
-            d = -BandedCholesky(H).solve(g)
-        except NotPositiveDefinite:
-            return _out(u, dp, it, t0, "Hessian not positive definite")
-        dec2 = max(-(g @ d), 0.0)
-        scale = math.sqrt(max(u @ (H @ u), 0.0)) or 1.0
-        decrement = math.sqrt(dec2) / scale
-        if decrement <= tol:
-            return _out(u, dp, it - 1, t0, "Newton decrement below tolerance")
-        if decrement < FULL_STEP and decrement > 0.5 * previous:
-            # Full steps no longer reduce the decrement: it is at round-off level.
-            return _out(u, dp, it - 1, t0, f"decrement stagnated at {decrement:.1e} (round-off)")
-        if decrement < FULL_STEP:
-            # Inside the region of fast local convergence: full steps.
-            u, previous = u + d, decrement
-            continue
-        t = _line_search(dp, u, d, -dec2)
-        if t is None:
-            return _out(u, dp, it, t0, "line search failed")
-        u, previous = u + t * d, decrement
-    return _out(u, dp, max_iter, t0, f"stopped after {max_iter} iterations "
-                f"(decrement {decrement:.2e})")
+    # Method of multipliers for A z >= g.
+    lam = np.zeros(mf.A.shape[0])
+    if warm is not None and warm.get("lam") is not None and len(warm["lam"]) == len(lam):
+        lam = np.array(warm["lam"], float)
+    rho, rho_max = _penalty(mf)
+    total = 0
+    note = ""
+    previous = math.inf
+    for outer in range(1, MAX_OUTER + 1):
+        # Continuation: the penalty starts gentle (a soft foundation, which Newton
+        # solves from any start) and stiffens tenfold per update up to rho_max.
+        z, nit, note = _newton(mf, z, tol, max_iter - total, {"shift": lam, "rho": rho})
+        total += nit
+        lam = np.maximum(lam + rho * (dp.g - mf.A @ z), 0.0)
+        gap = mf.A @ z - dp.g
+        violation = float(max(-np.min(gap, initial=0.0), 0.0))
+        comp = complementarity(lam, gap, mf.scale(z, mf.hessian(z)))
+        # Stop with a margin below the certificate's tolerances.
+        if (violation <= 1e-3 * FEASIBILITY_TOL and comp <= 1e-2 * COMPLEMENTARITY_TOL) \
+                or total >= max_iter:
+            break
+        if rho < rho_max or violation > 0.25 * previous:
+            rho = min(10.0 * rho, rho_max)
+        previous = violation
+    note = f"{note}; {outer} multiplier updates"
+    return _finish(mf, z, lam, total, t0, note)
 
 
-def _line_search(dp, u, d, slope0, max_eval=30):
-    """Step length along the descent direction ``d`` (``slope0 = g'd < 0``).
+def _penalty(mf: MixedForm) -> tuple[float, float]:
+    """Initial and largest penalty of the method of multipliers.
 
-    The energy is convex, so ``phi'(t) = grad E(u + t d)' d`` increases with t
-    and ``phi'(t) <= 0`` proves ``E(u + t d) < E(u)``.  That test needs no
-    energy differences, which drown in round-off on fine meshes long before
-    the gradient does.  The full Newton step is taken when it does not
-    overshoot the minimum along ``d``; otherwise the root of phi' in (0, 1) is
-    bracketed and found by safeguarded secant (Illinois) steps.
+    A point force F bends an element of length h by about F h^3 / 12 (EI = 1
+    here), so 10 * 12 / h^3 is ten times stiffer than the beam at one point:
+    each multiplier update then cuts the violation by about ten.  Started
+    there, the first inner problem (from an undeformed beam far from contact)
+    takes Newton hundreds of damped steps on fine meshes, so the penalty
+    starts at the beam's global stiffness (about 1 in these units) and grows
+    tenfold per update; it may reach 1e3 * 12 / h^3 if the violation falls
+    slowly.
     """
-    def dphi(t):
-        return float(dp.gradient(u + t * d) @ d)
+    h = float(np.min(np.diff(mf.dp.xi)))
+    return 10.0, min(1e3 * 12.0 / h**3, RHO_CAP)
 
+
+def _newton(mf: MixedForm, z, tol, max_iter, al):
+    """Newton iterations on the (augmented) energy; returns (z, iterations, note)."""
+    dp = mf.dp
+    if dp.is_quadratic and not al:
+        # One KKT solve: the energy is quadratic.
+        d, _ = mf.kkt_solve(mf.hessian(z), -mf.gradient(z), -(mf.C @ z))
+        return z + d, 1, "one banded KKT solve (quadratic energy)"
+    previous = math.inf
+    for it in range(1, max(max_iter, 1) + 1):
+        g = mf.gradient(z, **al)
+        H = mf.hessian(z, **al)
+        decrement, d = mf.decrement(z, H, g, **al)
+        if decrement <= tol:
+            return z, it - 1, "Newton decrement below tolerance"
+        if dp.contact is not None:
+            predicted = _predict_active_set(mf, z, d, al)
+            if float(g @ predicted) < 0.5 * float(g @ d):  # keep it only if it descends
+                d = predicted
+        if decrement < ROUNDOFF and decrement > 0.5 * previous:
+            return z, it - 1, f"decrement stagnated at {decrement:.1e} (round-off)"
+        previous = decrement
+        t = _line_search(lambda s: float(mf.gradient(z + s * d, **al) @ d), float(g @ d))
+        if t is None:
+            return z, it, "line search stalled (round-off level)"
+        z = z + t * d
+    return z, max_iter, f"stopped after {max_iter} iterations"
+
+
+def _same(a, b):
+    return all((x is None and y is None) or (x is not None and np.array_equal(x, y))
+               for x, y in zip(a, b))
+
+
+def _predict_active_set(mf, z, d, al, rounds=8):
+    """Semismooth Newton step with the active set predicted at the step's end.
+
+    The contact forces are linearised on the points in contact at z + d
+    (primal-dual active-set style) and the step recomputed until the set
+    settles; the line search then judges the step on the true energy.
+    """
+    used = mf.active_sets(z, **al)
+    for _ in range(rounds):
+        predicted = mf.active_sets(z + d, **al)
+        if _same(predicted, used):
+            break
+        used = predicted
+        g = mf.gradient(z, active=used, **al)
+        H = mf.hessian(z, active=used, **al)
+        d, _ = mf.kkt_solve(H, -g, -(mf.C @ z))
+    return d
+
+
+def _line_search(dphi, slope0, max_eval=30):
+    """Step length along a descent direction from phi'(t) (``slope0 = phi'(0) < 0``).
+
+    The energy is convex along the line, so phi' increases and phi'(t) <= 0
+    proves a decrease without comparing energies (which drown in round-off on
+    fine meshes).  The full step is taken when it does not overshoot the
+    minimum along the line; otherwise Illinois steps find t with
+    |phi'(t)| <= 0.1 |phi'(0)| and phi'(t) <= 0.
+    """
+    if slope0 >= 0:
+        return None
     hi, f_hi = 1.0, dphi(1.0)
     if f_hi <= 0.0:
         return 1.0
-    lo, f_lo = 0.0, slope0
-    side = 0
+    lo, f_lo, side = 0.0, slope0, 0
     for _ in range(max_eval):
         t = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
         if not lo < t < hi:
@@ -108,11 +192,11 @@ def _line_search(dp, u, d, slope0, max_eval=30):
         f_t = dphi(t)
         if f_t <= 0.0:
             lo, f_lo = t, f_t
+            if f_t >= 0.1 * slope0:
+                return t
             if side == -1:
                 f_hi *= 0.5
             side = -1
-            if f_t >= 0.1 * slope0:  # within 10 % of the 1-D minimum's slope: enough
-                return t
         else:
             hi, f_hi = t, f_t
             if side == 1:
@@ -121,10 +205,48 @@ def _line_search(dp, u, d, slope0, max_eval=30):
     return lo if lo > 0 else None
 
 
-def _out(u, dp, nit, t0, message):
-    """Raw result; the status comes from the same optimality test as the convex solver's."""
-    residual = dp.residual(u)
+def certify(mf: MixedForm, z, lam=None) -> dict:
+    """Optimality measures of ``z`` (and obstacle multipliers) in the mixed form.
+
+    ``stationarity``: relative Newton decrement of the Lagrangian on the
+    linking constraints (for a quadratic energy, the relative error in the
+    energy norm); for an obstacle also ``feasibility`` (largest violation of
+    w >= g in units of the deflection scale), ``dual`` (most negative
+    multiplier, relative) and ``complementarity`` (relative).
+    """
+    dp = mf.dp
+    if mf.n == 0:
+        return {"stationarity": 0.0}
+    g = mf.gradient(z)
+    if lam is not None:
+        g = g - mf.AT @ lam
+    H = mf.hessian(z)
+    stationarity, _ = mf.decrement(z, H, g)
+    out = {"stationarity": stationarity}
+    if lam is not None:
+        gap = mf.A @ z - dp.g
+        scale = mf.scale(z, H)
+        lam_scale = np.max(np.abs(lam), initial=0.0) or 1.0
+        out["feasibility"] = float(max(-np.min(gap, initial=0.0), 0.0))
+        out["dual"] = float(max(-np.min(lam, initial=0.0), 0.0) / lam_scale)
+        out["complementarity"] = complementarity(lam, gap, scale)
+    return out
+
+
+def passes(residual: dict) -> bool:
+    """The certificate: every measure within its tolerance."""
     ok = residual["stationarity"] <= STATIONARITY_TOL
-    return {"u": u, "lam": None, "status": "optimal" if ok else "inaccurate",
-            "message": f"newton: {message}", "residual": residual, "nit": nit,
-            "solver": "banded-cholesky", "solve_time": time.perf_counter() - t0}
+    for key, tol in (("feasibility", FEASIBILITY_TOL), ("dual", FEASIBILITY_TOL),
+                     ("complementarity", COMPLEMENTARITY_TOL)):
+        if key in residual:
+            ok &= residual[key] <= tol
+    return bool(ok)
+
+
+def _finish(mf, z, lam, nit, t0, note):
+    residual = certify(mf, z, lam)
+    ok = passes(residual)
+    return {"u": mf.to_hermite(z), "lam": lam, "status": "optimal" if ok else "inaccurate",
+            "message": f"newton: {note}", "residual": residual, "nit": nit,
+            "solver": "banded-kkt", "solve_time": time.perf_counter() - t0,
+            "warm": {"z": z, "lam": lam}, "mixed": mf}

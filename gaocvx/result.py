@@ -164,7 +164,7 @@ class Result:
             "message": self.message,
             "residual": self.residual,
         }
-        out.update(self.extra)
+        out.update({k: v for k, v in self.extra.items() if k != "warm"})
         return out
 
     def summary(self) -> str:

@@ -36,21 +36,17 @@ OBSTACLE_CONTACT_TOL = 1e-6
 def choose_method(scene: Scene, method: str | None = None) -> str:
     """The method that ``method`` (default: the scene's) resolves to.
 
-    ``auto`` is the fastest exact method for the scene: Newton (one banded
-    solve when the energy is quadratic) without an obstacle, the convex
-    program with one.
+    ``auto`` is the fastest exact method for every scene kind: Newton (one
+    banded solve when the energy is quadratic; the method of multipliers for a
+    rigid obstacle).
     """
     method = method or scene.solve.method
-    if method == "auto":
-        return "convex" if scene.contact == "obstacle" else "newton"
-    if method == "newton" and scene.contact == "obstacle":
-        raise SceneError("solve.method", "newton does not handle a rigid obstacle yet; "
-                         "use \"convex\" or \"auto\"", method)
-    return method
+    return "newton" if method == "auto" else method
 
 
 def solve(scene: Scene, method: str | None = None, *, elements: int | None = None,
-          solver: str | None = None, problem: DiscreteProblem | None = None) -> Result:
+          solver: str | None = None, problem: DiscreteProblem | None = None,
+          warm: dict | None = None) -> Result:
     """Solve a scene and return its :class:`Result`.
 
     Parameters
@@ -64,6 +60,9 @@ def solve(scene: Scene, method: str | None = None, *, elements: int | None = Non
         Convex solver; overrides ``scene.solve.solver``.
     problem : DiscreteProblem, optional
         A discretisation of this scene to reuse.
+    warm : dict, optional
+        Newton only: ``result.extra["warm"]`` of an earlier solve on the same
+        mesh, to start from (sweeps).
 
     Raises
     ------
@@ -88,7 +87,7 @@ def solve(scene: Scene, method: str | None = None, *, elements: int | None = Non
     elif chosen == "convex":
         raw = solve_convex(dp, solver or scene.solve.solver)
     elif chosen == "newton":
-        raw = solve_newton(dp)
+        raw = solve_newton(dp, warm)
     elif chosen == "cvm":
         opts = scene.solve
         raw = solve_cvm(dp, opts.transform, opts.control, opts.minimizer, opts.bound)
@@ -129,12 +128,15 @@ def make_result(dp: DiscreteProblem, raw: dict, method: str, elapsed: float,
         touching[supported] &= (nxt | prev)[supported]
         zones = contact_zones(dp.x, touching)
         lam = raw["lam"]
-        force = dp.A_full.T @ lam  # consistent nodal forces, non-dimensional
+        rows = raw.get("reaction_rows", dp.A_full if raw.get("mixed") is None
+                       else raw["mixed"].A_hermite)
+        force = rows.T @ lam  # consistent nodal forces, non-dimensional
         reaction = force[0::2] * (dp.E0 / dp.W) / beam.load_factor
     return Result(
         scene=dp.scene, method=method, status=raw["status"], message=raw["message"],
         x=dp.x.copy(), w=w, slope=slope, energy=float(sum(parts.values())),
         energy_parts=parts, zones=zones, reaction=reaction, P_bar=dp.P_bar_h,
         time_s=elapsed, nit=raw.get("nit"), solver=raw.get("solver"),
-        residual=raw.get("residual", {}), extra=extra or {},
+        residual=raw.get("residual", {}),
+        extra={**(extra or {}), **({"warm": raw["warm"]} if "warm" in raw else {})},
     )
