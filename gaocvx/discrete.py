@@ -41,7 +41,8 @@ from .errors import SceneError
 from .linalg import BandedCholesky, NotPositiveDefinite
 from .scene import Scene
 
-__all__ = ["DiscreteProblem", "GAO_POINTS", "CONTACT_POINTS", "STATIONARITY_TOL", "FEASIBILITY_TOL"]
+__all__ = ["DiscreteProblem", "GAO_POINTS", "CONTACT_POINTS", "STATIONARITY_TOL", "FEASIBILITY_TOL",
+           "COMPLEMENTARITY_TOL"]
 
 GAO_POINTS = 5       # exact for the degree-8 integrand (w')^4
 CONTACT_POINTS = 5   # Gauss points of the foundation term (and obstacle constraints)
@@ -49,8 +50,25 @@ CONTACT_POINTS = 5   # Gauss points of the foundation term (and obstacle constra
 # A solve is "optimal" only when its relative energy-norm residual (see
 # DiscreteProblem.residual) is below this, whichever method produced it ...
 STATIONARITY_TOL = 1e-6
-# ... and, for an obstacle, feasibility, dual sign and complementarity below this.
+# ... and, for an obstacle, feasibility and dual sign below this ...
 FEASIBILITY_TOL = 1e-7
+# ... and complementarity below this: it is an energy, whose square root bounds the
+# error in the energy norm, so it must be below the square of STATIONARITY_TOL.
+COMPLEMENTARITY_TOL = STATIONARITY_TOL**2
+# In complementarity, a point closer to the obstacle than this (in units of the
+# deflection scale W) is touching it: a beam lying flat on the obstacle sits at
+# gaps of +-1e-11 W from round-off alone, which would otherwise dominate the bound.
+TOUCH_TOL = 1e-9
+
+
+def complementarity(lam, gap, scale) -> float:
+    """Relative duality gap sum(lam * gap) / scale^2, gaps below TOUCH_TOL counted as contact.
+
+    It bounds the energy excess of the answer (and its square root the relative
+    error in the energy norm).
+    """
+    gap = np.where(gap > TOUCH_TOL, gap, 0.0)
+    return float(abs(lam @ gap) / scale**2)
 
 
 class DiscreteProblem:
@@ -84,6 +102,25 @@ class DiscreteProblem:
 
     def __init__(self, scene: Scene, elements: int | None = None, check_convexity: bool = True,
                  nodes=None):
+        try:
+            with np.errstate(over="raise", invalid="raise", divide="raise"):
+                self._build(scene, elements, nodes)
+        except (OverflowError, FloatingPointError, ZeroDivisionError):
+            raise SceneError("scene", "its magnitudes (length, stiffness, loads) cannot be scaled "
+                             "within double precision", _magnitudes(scene)) from None
+        scales = [self.W, self.E0, self.p, self.a, self.c, self.g]
+        if not (np.all(np.isfinite(scales)) and np.all(np.isfinite(self.f)) and self.E0 > 0):
+            raise SceneError("scene", "its magnitudes (length, stiffness, loads) cannot be scaled "
+                             "within double precision", _magnitudes(scene))
+        if check_convexity and self.P > 0 and not self.P < self.P_bar_h:
+            beam = scene.beam
+            raise SceneError(
+                "load.axial",
+                f"P = {self.P:.4g} N is not below the convexity limit P_bar_h = "
+                f"{self.P_bar_h:.4g} N for {beam.supports} (continuum P_bar = {beam.P_bar():.4g} N)",
+                self.P)
+
+    def _build(self, scene, elements, nodes):
         self.scene = scene
         beam = scene.beam
         self.L = L = beam.length
@@ -175,13 +212,6 @@ class DiscreteProblem:
             self.con_points = pts[keep]
             self.A_full = A_full[keep]
             self.A = A[keep]
-
-        if check_convexity and self.P > 0 and not self.P < self.P_bar_h:
-            raise SceneError(
-                "load.axial",
-                f"P = {self.P:.4g} N is not below the convexity limit P_bar_h = "
-                f"{self.P_bar_h:.4g} N for {beam.supports} (continuum P_bar = {beam.P_bar():.4g} N)",
-                self.P)
 
     # ------------------------------------------------------------------ helpers
     def _w_rows(self) -> np.ndarray:
@@ -331,8 +361,13 @@ class DiscreteProblem:
             lam_scale = np.max(np.abs(lam), initial=0.0) or 1.0
             out["feasibility"] = float(max(-np.min(gap, initial=0.0), 0.0))
             out["dual"] = float(max(-np.min(lam, initial=0.0), 0.0) / lam_scale)
-            out["complementarity"] = float(np.abs(lam @ gap) / (scale**2))
+            out["complementarity"] = complementarity(lam, gap, scale)
         return out
+
+
+def _magnitudes(scene: Scene) -> str:
+    b = scene.beam
+    return f"L = {b.length:.3g} m, EI = {b.EI_eff:.3g} N m^2"
 
 
 def smallest_generalized_eigenvalue(K, G) -> float:
