@@ -258,5 +258,5 @@ def solve_convex(dp: DiscreteProblem, solver: str = "clarabel", verbose: bool = 
     return {
         "u": mf.to_hermite(z), "lam": lam, "status": result_status, "message": message,
         "residual": residual, "nit": getattr(stats, "num_iters", None), "solver": solver,
-        "solve_time": time.perf_counter() - t0, "mixed": mf, "reused": reused,
+        "solve_time": time.perf_counter() - t0, "mixed": mf, "z": z, "reused": reused,
     }

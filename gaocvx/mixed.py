@@ -149,16 +149,22 @@ class MixedForm:
         return z[self.free]
 
     # ---------------------------------------------------------------- energy
-    def energy(self, z) -> float:
+    def energy_parts(self, z) -> dict:
+        """Non-dimensional energy parts (multiply by E0 for J)."""
         dp = self.dp
-        e = 0.5 * (self.wq2 @ (self.B2 @ z) ** 2) - self.f @ z
+        parts = {"bending": 0.5 * (self.wq2 @ (self.B2 @ z) ** 2), "gao": 0.0, "axial": 0.0,
+                 "load": -(self.f @ z), "foundation": 0.0}
         if self.has_slope:
             s = self.B1 @ z
-            e += dp.a / 12.0 * (self.wq5 @ s**4) - 0.5 * dp.p * (self.wq5 @ s**2)
+            parts["gao"] = dp.a / 12.0 * (self.wq5 @ s**4)
+            parts["axial"] = -0.5 * dp.p * (self.wq5 @ s**2)
         if dp.contact == "foundation":
             pen = np.maximum(dp.g - self.Nq @ z, 0.0)
-            e += 0.5 * dp.c * (self.wqc @ pen**2)
-        return float(e)
+            parts["foundation"] = 0.5 * dp.c * (self.wqc @ pen**2)
+        return {k: float(v) for k, v in parts.items()}
+
+    def energy(self, z) -> float:
+        return sum(self.energy_parts(z).values())
 
     def gradient(self, z, shift=None, rho=0.0, active=None) -> np.ndarray:
         """Gradient; with ``shift``/``rho``, of the obstacle's augmented Lagrangian too.
@@ -213,20 +219,30 @@ class MixedForm:
         keys = np.concatenate([key_z, key_l])
         return np.argsort(keys, kind="stable")
 
-    def kkt_solve(self, H, rhs_z, rhs_c) -> tuple[np.ndarray, np.ndarray]:
-        """Solve ``[[H, C'], [C, 0]] [d; mu] = [rhs_z; rhs_c]`` as a banded system."""
+    def kkt_factor(self, H) -> "_KKTFactor":
+        """Banded LU of ``[[H, C'], [C, 0]]`` in the interleaved order (reusable)."""
         K = sp.bmat([[H, self.C.T], [self.C, None]], format="coo")
+        K.sum_duplicates()
         p = self._order
         inv = np.empty_like(p)
         inv[p] = np.arange(len(p))
         r, c = inv[K.row], inv[K.col]
         lo, up = int(np.max(r - c, initial=0)), int(np.max(c - r, initial=0))
-        ab = np.zeros((lo + up + 1, len(p)))
-        np.add.at(ab, (up + r - c, c), K.data)
-        b = np.concatenate([rhs_z, rhs_c])[p]
-        sol = np.empty(len(p))
-        sol[p] = sla.solve_banded((lo, up), ab, b, check_finite=False)
-        return sol[: self.n], sol[self.n:]
+        ab = np.zeros((2 * lo + up + 1, len(p)))
+        ab[lo + up + r - c, c] = K.data  # LAPACK gbtrf storage (lo extra rows for fill)
+        return _KKTFactor(ab, lo, up, p, self.n)
+
+    def kkt_solve(self, H, rhs_z, rhs_c) -> tuple[np.ndarray, np.ndarray]:
+        """Solve ``[[H, C'], [C, 0]] [d; mu] = [rhs_z; rhs_c]`` as a banded system."""
+        return self.kkt_factor(H).solve(rhs_z, rhs_c)
+
+    @functools.cached_property
+    def quadratic_factor(self) -> "_KKTFactor":
+        """KKT factor of the bending and axial part H0 (the whole Hessian of a quadratic energy)."""
+        H0 = self.B2T @ sp.diags(self.wq2) @ self.B2
+        if self.has_slope and self.dp.p:
+            H0 = H0 - self.dp.p * (self.B1T @ sp.diags(self.wq5) @ self.B1)
+        return self.kkt_factor(H0.tocsr())
 
     @functools.cached_property
     def load_scale(self) -> float:
@@ -236,11 +252,7 @@ class MixedForm:
         of the linear problem, a scale that does not vanish with the solution
         (a beam resting on a gap-0 obstacle has w = 0).
         """
-        z0 = np.zeros(self.n)
-        H0 = self.B2T @ sp.diags(self.wq2) @ self.B2
-        if self.has_slope and self.dp.p:
-            H0 = H0 - self.dp.p * (self.B1T @ sp.diags(self.wq5) @ self.B1)
-        d, _ = self.kkt_solve(H0.tocsr(), self.f, self.C @ z0)
+        d, _ = self.quadratic_factor.solve(self.f, np.zeros(self.N))
         return math.sqrt(max(float(self.f @ d), 0.0))
 
     def scale(self, z, H) -> float:
@@ -250,16 +262,34 @@ class MixedForm:
             return 1.0
         return max(math.sqrt(max(float(z @ (H @ z)), 0.0)), load)
 
-    def decrement(self, z, H=None, g=None, **al) -> tuple[float, np.ndarray]:
+    def decrement(self, z, H=None, g=None, factor=None, **al) -> tuple[float, np.ndarray]:
         """Relative Newton decrement on the constraint manifold, and the Newton step.
 
         Inside the method of multipliers (``al`` given) the scale is the load's
         energy norm: the penalty's rho ||A z||^2 in z' H z is no measure of the
-        problem's size.
+        problem's size.  ``factor`` is a KKT factor of H to reuse.
         """
         g = self.gradient(z, **al) if g is None else g
         H = self.hessian(z, **al) if H is None else H
-        d, _ = self.kkt_solve(H, -g, -(self.C @ z))
+        factor = self.kkt_factor(H) if factor is None else factor
+        d, _ = factor.solve(-g, -(self.C @ z))
         dec2 = max(float(d @ (H @ d)), 0.0)
         scale = (self.load_scale or 1.0) if al else self.scale(z, H)
         return math.sqrt(dec2) / scale, d
+
+
+class _KKTFactor:
+    """LU factor (LAPACK gbtrf) of a banded KKT matrix, for repeated solves."""
+
+    def __init__(self, ab, lo, up, order, n):
+        self.lu, self.piv, info = sla.lapack.dgbtrf(ab, lo, up)
+        if info > 0:
+            raise np.linalg.LinAlgError("singular KKT matrix")
+        self.lo, self.up, self.order, self.n = lo, up, order, n
+
+    def solve(self, rhs_z, rhs_c) -> tuple[np.ndarray, np.ndarray]:
+        b = np.concatenate([rhs_z, rhs_c])[self.order]
+        x, info = sla.lapack.dgbtrs(self.lu, self.lo, self.up, b, self.piv)
+        sol = np.empty(len(self.order))
+        sol[self.order] = x
+        return sol[: self.n], sol[self.n:]

@@ -122,8 +122,8 @@ def _newton(mf: MixedForm, z, tol, max_iter, al):
     """Newton iterations on the (augmented) energy; returns (z, iterations, note)."""
     dp = mf.dp
     if dp.is_quadratic and not al:
-        # One KKT solve: the energy is quadratic.
-        d, _ = mf.kkt_solve(mf.hessian(z), -mf.gradient(z), -(mf.C @ z))
+        # One KKT solve: the energy is quadratic (its factor serves the certificate too).
+        d, _ = mf.quadratic_factor.solve(-mf.gradient(z), -(mf.C @ z))
         return z + d, 1, "one banded KKT solve (quadratic energy)"
     previous = math.inf
     for it in range(1, max(max_iter, 1) + 1):
@@ -221,7 +221,8 @@ def certify(mf: MixedForm, z, lam=None) -> dict:
     if lam is not None:
         g = g - mf.AT @ lam
     H = mf.hessian(z)
-    stationarity, _ = mf.decrement(z, H, g)
+    factor = mf.quadratic_factor if dp.is_quadratic else None
+    stationarity, _ = mf.decrement(z, H, g, factor=factor)
     out = {"stationarity": stationarity}
     if lam is not None:
         gap = mf.A @ z - dp.g
@@ -249,4 +250,4 @@ def _finish(mf, z, lam, nit, t0, note):
     return {"u": mf.to_hermite(z), "lam": lam, "status": "optimal" if ok else "inaccurate",
             "message": f"newton: {note}", "residual": residual, "nit": nit,
             "solver": "banded-kkt", "solve_time": time.perf_counter() - t0,
-            "warm": {"z": z, "lam": lam}, "mixed": mf}
+            "warm": {"z": z, "lam": lam}, "mixed": mf, "z": z}

@@ -7,6 +7,7 @@ JSON object of scene-format.md.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -57,7 +58,7 @@ class Result:
         force [N] per node (consistent nodal force of the constraint's
         multipliers), in physical units.
     P_bar : float
-        Discrete convexity limit P_bar_h [N].
+        Discrete convexity limit P_bar_h [N] (computed on first access).
     time_s : float
     nit : int or None
         Iterations of the method.
@@ -78,12 +79,17 @@ class Result:
     energy_parts: dict
     zones: list | None
     reaction: np.ndarray | None
-    P_bar: float
+    problem: object = field(repr=False, compare=False)
     time_s: float
     nit: int | None = None
     solver: str | None = None
     residual: dict = field(default_factory=dict)
     extra: dict = field(default_factory=dict)
+
+    @functools.cached_property
+    def P_bar(self) -> float:
+        """Discrete convexity limit P_bar_h [N] of the mesh solved on."""
+        return float(self.problem.P_bar_h)
 
     @property
     def success(self) -> bool:

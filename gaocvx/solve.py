@@ -81,9 +81,7 @@ def solve(scene: Scene, method: str | None = None, *, elements: int | None = Non
     chosen = choose_method(scene, method)
     dp = problem if problem is not None else DiscreteProblem(scene, elements=elements)
     if dp.n == 0:  # every DOF fixed by the supports: the answer is w = 0
-        raw = {"u": np.zeros(0), "lam": np.zeros(dp.A.shape[0]) if dp.contact == "obstacle"
-               else None, "status": "optimal", "message": "no free degrees of freedom: w = 0",
-               "residual": {"stationarity": 0.0}, "nit": 0, "solver": None}
+        raw = solve_newton(dp)
     elif chosen == "convex":
         raw = solve_convex(dp, solver or scene.solve.solver)
     elif chosen == "newton":
@@ -110,7 +108,10 @@ def make_result(dp: DiscreteProblem, raw: dict, method: str, elapsed: float,
     """Turn a solver's raw output on ``dp`` into a :class:`Result` in physical units."""
     u = raw["u"]
     w, slope = dp.to_physical(u)
-    parts = {k: v * dp.E0 for k, v in dp.energy_parts(u).items()}
+    # Energies from the better-conditioned mixed variables when the solver has them.
+    mf = raw.get("mixed")
+    parts = mf.energy_parts(raw["z"]) if mf is not None else dp.energy_parts(u)
+    parts = {k: v * dp.E0 for k, v in parts.items()}
     beam = dp.scene.beam
     zones = reaction = None
     if dp.contact == "foundation":
@@ -128,14 +129,12 @@ def make_result(dp: DiscreteProblem, raw: dict, method: str, elapsed: float,
         touching[supported] &= (nxt | prev)[supported]
         zones = contact_zones(dp.x, touching)
         lam = raw["lam"]
-        rows = raw.get("reaction_rows", dp.A_full if raw.get("mixed") is None
-                       else raw["mixed"].A_hermite)
-        force = rows.T @ lam  # consistent nodal forces, non-dimensional
+        force = mf.A_hermite.T @ lam  # consistent nodal forces, non-dimensional
         reaction = force[0::2] * (dp.E0 / dp.W) / beam.load_factor
     return Result(
         scene=dp.scene, method=method, status=raw["status"], message=raw["message"],
         x=dp.x.copy(), w=w, slope=slope, energy=float(sum(parts.values())),
-        energy_parts=parts, zones=zones, reaction=reaction, P_bar=dp.P_bar_h,
+        energy_parts=parts, zones=zones, reaction=reaction, problem=dp,
         time_s=elapsed, nit=raw.get("nit"), solver=raw.get("solver"),
         residual=raw.get("residual", {}),
         extra={**(extra or {}), **({"warm": raw["warm"]} if "warm" in raw else {})},
