@@ -79,7 +79,8 @@ def _cmd_solve(args) -> int:
                       file=sys.stderr)
             if args.plot:
                 from .plot import save_plot
-                save_plot(result, _plot_name(args.plot, path, len(args.scenes)))
+                panels = [p.strip() for p in (args.panels or "").split(",") if p.strip()]
+                save_plot(result, _plot_name(args.plot, path, len(args.scenes)), panels)
         except SceneError as exc:
             code = EXIT_INPUT
             record.update(status="error", error=str(exc))
@@ -149,6 +150,120 @@ def _plot_name(name: str, scene_path: str, count: int) -> str:
     return str(p.with_name(f"{p.stem}-{Path(scene_path).stem}{p.suffix}"))
 
 
+def _common(p):
+    p.add_argument("--method", help="auto | convex | newton | cvm (overrides solve.method)")
+    p.add_argument("--elements", type=int, help="number of elements (overrides mesh.elements)")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a scene value")
+    p.add_argument("--json", action="store_true", help="JSON on stdout")
+
+
+def _load(args):
+    from .scene import load_scene
+    overrides = _overrides(args.set)
+    if args.elements is not None:
+        overrides["mesh.elements"] = args.elements
+    if args.method is not None:
+        overrides["solve.method"] = args.method
+    return load_scene(args.scene, overrides)
+
+
+def _cmd_compare(args) -> int:
+    from .solve import solve
+
+    scene = _load(args)
+    if scene.beam.nu is None:
+        raise SceneError("beam.nu", "missing: the gao model needs Poisson's ratio")
+    results = {model: solve(_with_model(scene, model)) for model in ("euler-bernoulli", "gao")}
+    eb, gao = results["euler-bernoulli"], results["gao"]
+    diff = {"min_w_ratio": gao.min["w"] / eb.min["w"] if eb.min["w"] else None,
+            "energy_ratio": gao.energy / eb.energy if eb.energy else None}
+    if args.json:
+        print(_dumps({"scene": args.scene, "euler-bernoulli": eb.to_dict(), "gao": gao.to_dict(),
+                      "comparison": diff}))
+    else:
+        for model, r in results.items():
+            zones = ", ".join(f"[{a:.4g}, {b:.4g}]" for a, b in r.zones) if r.zones else "-"
+            print(f"{model:16s} {r.status:10s} min w {r.min['w']:.6g} m at x = {r.min['x']:.4g} m,"
+                  f" max w {r.max['w']:.6g} m, energy {r.energy:.6g} J, contact {zones}")
+        if diff["min_w_ratio"] is not None:
+            print(f"gao / euler-bernoulli: min w x{diff['min_w_ratio']:.4f}, "
+                  f"energy x{diff['energy_ratio']:.4f}")
+    if args.plot:
+        from .plot import save_compare_plot
+        save_compare_plot(results, args.plot)
+    return EXIT_OK if all(r.success for r in results.values()) else EXIT_SOLVER
+
+
+def _with_model(scene, model):
+    from .scene import Scene
+    data = scene.to_dict()
+    data["beam"]["model"] = model
+    if model == "euler-bernoulli":
+        data["beam"].pop("E_alpha", None)
+    return Scene.from_dict(data)
+
+
+def _cmd_sweep(args) -> int:
+    import csv as csvmod
+
+    from .sweep import ProgressBar, parse_range, summary_row, sweep
+
+    if "=" not in args.vary:
+        raise SceneError("--vary", "must be KEY=START:STOP:NUM[:log]", args.vary)
+    key, spec = (s.strip() for s in args.vary.split("=", 1))
+    values = parse_range(spec, "--vary")
+    if args.jobs < 1:
+        raise SceneError("--jobs", "must be at least 1", args.jobs)
+    scene = _load(args)
+    bar = ProgressBar(f"sweep {key}")
+    rows, worst = [], EXIT_OK
+    for value, item in sweep(scene, key, values, jobs=args.jobs, dask=args.dask, progress=bar):
+        row = summary_row(value, item)
+        rows.append(row)
+        if isinstance(item, Exception):
+            worst = max(worst, EXIT_INPUT if isinstance(item, SceneError) else EXIT_SOLVER)
+        elif not item.success:
+            worst = max(worst, EXIT_SOLVER)
+        if args.json:
+            record = ({"value": value, "key": key, "status": "error", "error": str(item)}
+                      if isinstance(item, Exception)
+                      else {"value": value, "key": key, **item.to_dict()})
+            print(_dumps(record), flush=True)
+    if not args.json:
+        head = f"{key:>22s} {'status':10s} {'min w [m]':>12s} {'at x':>7s} {'energy [J]':>12s} {'contact [m]':>11s}"
+        print(head)
+        for r in rows:
+            if r["status"] == "error":
+                print(f"{r['value']:22.6g} error      {r['error']}")
+            else:
+                print(f"{r['value']:22.6g} {r['status']:10s} {r['min_w']:12.6g} {r['min_x']:7.4g} "
+                      f"{r['energy']:12.6g} {r['contact_length']:11.4g}")
+    if args.csv:
+        fields = ["value", "status", "method", "min_w", "min_x", "max_w", "max_x", "energy",
+                  "contact_length", "penetration", "time_s", "error"]
+        with open(args.csv, "w", newline="") as fh:
+            writer = csvmod.DictWriter(fh, fieldnames=fields, extrasaction="ignore")
+            writer.writeheader()
+            writer.writerows(rows)
+    if args.plot:
+        from .plot import save_sweep_plot
+        reference = None
+        if key == "foundation.stiffness":
+            # The limit k_F -> infinity: the rigid obstacle at the same gap.
+            from .solve import solve
+            data = scene.to_dict()
+            data["obstacle"] = {"gap": data.pop("foundation")["gap"]}
+            if data.get("solve", {}).get("method") == "cvm":  # cvm has no rigid obstacle
+                data["solve"]["method"] = "auto"
+            from .scene import Scene
+            ob = solve(Scene.from_dict(data))
+            reference = {"label": "rigid obstacle (k_F -> inf)", "energy": ob.energy,
+                         "max_abs_w": max(abs(ob.min["w"]), abs(ob.max["w"])),
+                         "contact_length": float(sum(b - a for a, b in ob.zones or []))}
+        save_sweep_plot(rows, key, args.plot, reference, log=spec.endswith(":log"))
+    return worst
+
+
 def _build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="gaocvx", description="Gao and Euler-Bernoulli beams: bending and "
                      "contact, solved as convex programs.")
@@ -166,7 +281,29 @@ def _build_parser() -> argparse.ArgumentParser:
                    help="override one scene value, e.g. --set beam.nu=0.25 (repeatable)")
     p.add_argument("--json", action="store_true", help="JSON (Lines) on stdout")
     p.add_argument("--plot", metavar="FILE", help="write a picture of the deflection (PNG/SVG)")
+    p.add_argument("--panels", metavar="LIST",
+                   help="extra plot panels, comma-separated: slope,moment,shear,reaction")
     p.set_defaults(func=_cmd_solve)
+
+    p = sub.add_parser("compare", help="the scene with the Euler-Bernoulli and the Gao model")
+    p.add_argument("scene", metavar="SCENE")
+    _common(p)
+    p.add_argument("--plot", metavar="FILE", help="write both deflections on one picture")
+    p.set_defaults(func=_cmd_compare)
+
+    p = sub.add_parser("sweep", help="solve the scene for each value of one key")
+    p.add_argument("scene", metavar="SCENE")
+    p.add_argument("--vary", required=True, metavar="KEY=START:STOP:NUM[:log]",
+                   help="the key and its values, e.g. foundation.stiffness=1e8:1e12:20:log "
+                   "(load.scale multiplies every vertical load)")
+    _common(p)
+    p.add_argument("--csv", metavar="FILE", help="write one row per value")
+    p.add_argument("--plot", metavar="FILE", help="write max deflection, energy and contact "
+                   "length against the value")
+    p.add_argument("--jobs", type=int, default=1, metavar="N", help="worker processes")
+    p.add_argument("--dask", metavar="ADDRESS", help="send the values to a Dask scheduler "
+                   "(needs dask[distributed])")
+    p.set_defaults(func=_cmd_sweep)
 
     p = sub.add_parser("verify", help="score a computed deflection (CSV: x, w[, slope]) "
                        "against the ground truth")

@@ -82,6 +82,10 @@ class DiscreteProblem:
         Override of ``scene.mesh.elements``.
     check_convexity : bool
         Raise :class:`SceneError` on ``load.axial`` when P >= P_bar_h.
+    nodes : array_like, optional
+        An explicit mesh instead of equal elements.
+    W : float, optional
+        The deflection scale [m]; by default the size of the linear answer.
 
     Attributes
     ----------
@@ -101,10 +105,10 @@ class DiscreteProblem:
     """
 
     def __init__(self, scene: Scene, elements: int | None = None, check_convexity: bool = True,
-                 nodes=None):
+                 nodes=None, W: float | None = None):
         try:
             with np.errstate(over="raise", invalid="raise", divide="raise"):
-                self._build(scene, elements, nodes)
+                self._build(scene, elements, nodes, W)
         except (OverflowError, FloatingPointError, ZeroDivisionError):
             raise SceneError("scene", "its magnitudes (length, stiffness, loads) cannot be scaled "
                              "within double precision", _magnitudes(scene)) from None
@@ -120,7 +124,7 @@ class DiscreteProblem:
                 f"{self.P_bar_h:.4g} N for {beam.supports} (continuum P_bar = {beam.P_bar():.4g} N)",
                 self.P)
 
-    def _build(self, scene, elements, nodes):
+    def _build(self, scene, elements, nodes, W_fixed):
         self.scene = scene
         beam = scene.beam
         self.L = L = beam.length
@@ -164,7 +168,9 @@ class DiscreteProblem:
         if self.n:
             w_lin = np.max(np.abs(self._K_chol.solve(f_unit)[self._w_rows()]), initial=0.0)
         gap = scene.gap
-        if w_lin > 0:
+        if W_fixed is not None:
+            self.W = float(W_fixed)  # a sweep keeps one scale for all its scenes
+        elif w_lin > 0:
             self.W = float(w_lin)
         elif gap:
             self.W = float(gap)

@@ -46,7 +46,7 @@ def choose_method(scene: Scene, method: str | None = None) -> str:
 
 def solve(scene: Scene, method: str | None = None, *, elements: int | None = None,
           solver: str | None = None, problem: DiscreteProblem | None = None,
-          warm: dict | None = None) -> Result:
+          warm: dict | None = None, reuse: bool = False) -> Result:
     """Solve a scene and return its :class:`Result`.
 
     Parameters
@@ -62,7 +62,9 @@ def solve(scene: Scene, method: str | None = None, *, elements: int | None = Non
         A discretisation of this scene to reuse.
     warm : dict, optional
         Newton only: ``result.extra["warm"]`` of an earlier solve on the same
-        mesh, to start from (sweeps).
+        mesh and scale, to start from (sweeps).
+    reuse : bool
+        Convex only: keep and reuse the compiled parametric program (sweeps).
 
     Raises
     ------
@@ -83,7 +85,7 @@ def solve(scene: Scene, method: str | None = None, *, elements: int | None = Non
     if dp.n == 0:  # every DOF fixed by the supports: the answer is w = 0
         raw = solve_newton(dp)
     elif chosen == "convex":
-        raw = solve_convex(dp, solver or scene.solve.solver)
+        raw = solve_convex(dp, solver or scene.solve.solver, reuse=reuse)
     elif chosen == "newton":
         raw = solve_newton(dp, warm)
     elif chosen == "cvm":

@@ -1,0 +1,236 @@
+"""Solve one scene for many values of one key: obstacle-contact experiments.
+
+:func:`sweep` changes one dotted scene key (or the pseudo-key ``load.scale``,
+a factor on every vertical load) over a range of values and solves each
+scene, reusing what can be reused: the deflection scale of the first scene is
+kept, so Newton starts each value from the previous answer and the convex
+program is compiled once with Parameters and only re-solved.  Values can be
+spread over worker processes (``jobs``) or over a Dask cluster (``dask``),
+each taking a contiguous block so that reuse still works inside it.
+
+Examples
+--------
+>>> from gaocvx import Scene
+>>> scene = Scene.from_dict({"beam": {"supports": "P1", "length": 1.0, "E": 2.1e11,
+...     "nu": 0.3, "half_thickness": 0.1, "width": 1.0}, "load": {"q": -5e8},
+...     "foundation": {"gap": 0.007, "stiffness": 5e8}, "mesh": {"elements": 16}})
+>>> values = parse_range("5e8:5e12:3:log")
+>>> depth = [-0.007 - r.min["w"] for v, r in sweep(scene, "foundation.stiffness", values)]
+>>> depth[0] > depth[1] > depth[2] > 0    # the stiffer foundation lets the beam sink less
+True
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import sys
+import time
+from typing import Iterator
+
+import numpy as np
+
+from .discrete import DiscreteProblem
+from .errors import SceneError, SolverError
+from .scene import Scene
+from .solve import choose_method, solve
+
+__all__ = ["parse_range", "sweep", "scene_at", "summary_row", "LOAD_SCALE"]
+
+log = logging.getLogger(__name__)
+
+LOAD_SCALE = "load.scale"
+
+
+def parse_range(text: str, key: str = "--vary") -> np.ndarray:
+    """Values of ``START:STOP:NUM[:log]`` (NUM >= 1; log spacing needs START, STOP > 0).
+
+    Examples
+    --------
+    >>> parse_range("0:1:3").tolist()
+    [0.0, 0.5, 1.0]
+    >>> parse_range("1e8:1e10:3:log").tolist()
+    [100000000.0, 1000000000.0, 10000000000.0]
+    """
+    parts = text.split(":")
+    if len(parts) not in (3, 4) or (len(parts) == 4 and parts[3] != "log"):
+        raise SceneError(key, "must be START:STOP:NUM or START:STOP:NUM:log", text)
+    try:
+        start, stop = float(parts[0]), float(parts[1])
+        num = int(parts[2])
+    except ValueError:
+        raise SceneError(key, "START and STOP must be numbers and NUM a whole number",
+                         text) from None
+    if not (math.isfinite(start) and math.isfinite(stop)):
+        raise SceneError(key, "START and STOP must be finite", text)
+    if not 1 <= num <= 100_000:
+        raise SceneError(key, "NUM must be between 1 and 100000", text)
+    if len(parts) == 4:
+        if start <= 0 or stop <= 0:
+            raise SceneError(key, "a log range needs START > 0 and STOP > 0", text)
+        return np.geomspace(start, stop, num)
+    return np.linspace(start, stop, num)
+
+
+def scene_at(scene: Scene, key: str, value: float) -> Scene:
+    """The scene with ``key`` set to ``value`` (``load.scale`` multiplies the loads)."""
+    if key == LOAD_SCALE:
+        load = scene.load
+        q = load.q
+        if load.is_table:
+            q = [[x, v * value] for x, v in q]
+        elif q is not None:
+            q = q * value
+        overrides = {"load.points": [[x, F * value] for x, F in load.points]}
+        if q is not None:
+            overrides["load.q"] = q
+        return scene.with_overrides(overrides)
+    return scene.with_overrides({key: value})
+
+
+def _check_key(scene: Scene, key: str) -> None:
+    """Fail fast on a key no value could make valid."""
+    if key == LOAD_SCALE:
+        return
+    from .scene import _PARTS
+    section, _, name = key.partition(".")
+    if section not in _PARTS or name not in _PARTS[section].KEYS:
+        raise SceneError(key, "unknown scene key (use section.name, e.g. foundation.stiffness, "
+                         f"or {LOAD_SCALE})", key)
+    if section == "mesh":
+        raise SceneError(key, "a sweep keeps its mesh; vary a physical key", key)
+    if section in ("foundation", "obstacle") and getattr(scene, section) is None:
+        raise SceneError(key, f"the scene has no [{section}] table to vary", key)
+
+
+# The parametric (DPP) convex program compiles ~25x slower than a constant one
+# and Clarabel cannot warm-start, so it pays off only on long sweeps (measured
+# break-even about 50 values at 256 elements).
+CONVEX_REUSE_MIN = 50
+
+
+def _solve_values(scene: Scene, key: str, values, method: str | None):
+    """Solve values in order, reusing scale, warm starts and programs; yield (value, item)."""
+    W = warm = None
+    reuse = len(values) >= CONVEX_REUSE_MIN
+    for value in values:
+        try:
+            s = scene_at(scene, key, float(value))
+            chosen = choose_method(s, method)
+            dp = DiscreteProblem(s, W=W)
+            W = dp.W if W is None else W
+            result = solve(s, chosen, problem=dp, warm=warm if chosen == "newton" else None,
+                           reuse=reuse and chosen == "convex")
+            warm = result.extra.get("warm")
+            yield float(value), result
+        except (SceneError, SolverError) as exc:
+            yield float(value), exc
+
+
+def _solve_block(scene: Scene, key: str, values, method: str | None) -> list:
+    """A contiguous block of values, for a worker process or a Dask task."""
+    return list(_solve_values(scene, key, values, method))
+
+
+def _blocks(values, n):
+    n = max(1, min(n, len(values)))
+    edges = np.linspace(0, len(values), n + 1).astype(int)
+    return [values[a:b] for a, b in zip(edges[:-1], edges[1:]) if b > a]
+
+
+def sweep(scene: Scene, key: str, values, method: str | None = None, jobs: int = 1,
+          dask: str | None = None, progress=None) -> Iterator[tuple[float, object]]:
+    """Solve ``scene`` for each value of ``key``; yield ``(value, Result or error)`` in order.
+
+    Parameters
+    ----------
+    scene : Scene
+    key : str
+        Dotted scene key, e.g. ``"foundation.stiffness"``, or ``"load.scale"``.
+    values : sequence of float
+    method : str, optional
+        As in :func:`gaocvx.solve`.
+    jobs : int
+        Worker processes (each solves a contiguous block of values).
+    dask : str, optional
+        Address of a Dask scheduler (``"tcp://host:8786"``) to send the blocks
+        to instead (needs the optional ``dask[distributed]``).
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each value.
+
+    A value whose scene is invalid yields its :class:`SceneError` (or a
+    :class:`SolverError`) in place of a result; the sweep goes on.
+    """
+    values = np.asarray(values, float)
+    _check_key(scene, key)
+    total = len(values)
+    if dask is None and jobs <= 1:
+        stream = _solve_values(scene, key, values, method)
+    else:
+        blocks = _blocks(values, jobs if dask is None else max(jobs, 1) * 4)
+        mapped = (_dask_map(dask, scene, key, blocks, method) if dask is not None
+                  else _process_map(jobs, scene, key, blocks, method))
+        stream = (item for block in mapped for item in block)
+    for done, item in enumerate(stream, start=1):
+        if progress:
+            progress(done, total)
+        yield item
+
+
+def _process_map(jobs, scene, key, blocks, method):
+    from concurrent.futures import ProcessPoolExecutor
+    with ProcessPoolExecutor(max_workers=jobs) as pool:
+        futures = [pool.submit(_solve_block, scene, key, block, method) for block in blocks]
+        for f in futures:  # in order
+            yield f.result()
+
+
+def _dask_map(address, scene, key, blocks, method):
+    try:
+        from dask.distributed import Client
+    except ImportError:
+        raise SceneError("--dask", "needs the optional dependency dask[distributed] "
+                         "(pip install 'gaocvx[dask]')", address) from None
+    try:
+        client = Client(address, timeout=10)
+    except OSError as exc:
+        raise SceneError("--dask", f"cannot reach the Dask scheduler: {exc}", address) from None
+    try:
+        futures = client.map(_solve_block, [scene] * len(blocks), [key] * len(blocks), blocks,
+                             [method] * len(blocks), pure=False)
+        for f in futures:
+            yield f.result()
+    finally:
+        client.close()
+
+
+def summary_row(value: float, item) -> dict:
+    """The numbers a sweep reports for one value (or its error)."""
+    if isinstance(item, Exception):
+        return {"value": value, "status": "error", "error": str(item)}
+    r = item
+    zones = r.zones or []
+    row = {"value": value, "status": r.status, "method": r.method,
+           "min_w": r.min["w"], "min_x": r.min["x"], "max_w": r.max["w"], "max_x": r.max["x"],
+           "energy": r.energy, "contact_length": float(sum(b - a for a, b in zones)),
+           "time_s": r.time_s}
+    gap = r.scene.gap
+    if gap is not None:
+        row["penetration"] = float(max(-gap - r.min["w"], 0.0))
+    return row
+
+
+class ProgressBar:
+    """A one-line progress bar on a stream (stderr by default)."""
+
+    def __init__(self, label: str, stream=None, width: int = 30):
+        self.label, self.stream, self.width = label, stream or sys.stderr, width
+        self.t0 = time.perf_counter()
+
+    def __call__(self, done: int, total: int) -> None:
+        filled = int(self.width * done / max(total, 1))
+        bar = "#" * filled + "-" * (self.width - filled)
+        elapsed = time.perf_counter() - self.t0
+        end = "\n" if done >= total else ""
+        self.stream.write(f"\r{self.label} [{bar}] {done}/{total} {elapsed:.1f} s{end}")
+        self.stream.flush()
