@@ -1,0 +1,86 @@
+"""Every example runs and gives the answer its comment states (pinned to outside references)."""
+
+import runpy
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conftest import EI_THESIS
+from exact import ExactBeam
+from gaocvx import load_scene, solve
+
+EXAMPLES = Path(__file__).parent.parent / "examples"
+
+
+def run(name):
+    result = solve(load_scene(EXAMPLES / name))
+    assert result.success, result.message
+    return result
+
+
+def test_simply_supported_closed_form():
+    r = run("simply_supported_eb.toml")
+    assert r.min["w"] == pytest.approx(5 * -5e7 / (384 * EI_THESIS), rel=1e-10)
+    assert r.min["x"] == 0.5
+
+
+def test_clamped_pinned_table_points_exact():
+    r = run("clamped_pinned_table_points.toml")
+    exact = ExactBeam("P2", 1.0, EI_THESIS, [[0.0, 0.0], [0.5, -6e7], [1.0, 0.0]],
+                      [(0.25, -2e7), (0.8, 1e7)])
+    assert np.abs(r.w - exact(r.x)).max() <= 1e-9 * np.abs(r.w).max()
+    assert r.min["w"] == pytest.approx(-1.6477e-3, rel=1e-4) and r.min["x"] == 0.53125
+
+
+def test_cantilever_gao_tension_thesis():
+    r = run("cantilever_gao_tension.toml")
+    assert r.min["w"] == pytest.approx(-0.02922, rel=5e-3)   # thesis table 4.8a
+    assert r.min["x"] == 1.0
+
+
+def test_pinned_obstacle_point_closed_form():
+    r = run("pinned_obstacle_point.toml")
+    mid = int(np.argmin(np.abs(r.x - 0.5)))
+    assert r.w[mid] == pytest.approx(-1e-3, rel=1e-7)
+    assert r.reaction[mid] == pytest.approx(4e7 - 48 * EI_THESIS * 1e-3, rel=1e-5)
+
+
+def test_cantilever_table_obstacle_methods_agree():
+    scene = load_scene(EXAMPLES / "cantilever_table_obstacle.toml")
+    a, b = solve(scene, "newton"), solve(scene, "convex")
+    assert a.success and b.success
+    assert a.min["w"] == pytest.approx(-0.02, rel=1e-7) and a.zones == [[1.0, 1.0]]
+    assert np.abs(a.w - b.w).max() <= 1e-9
+    assert a.reaction[-1] == pytest.approx(1.8015e7, rel=1e-4)
+
+
+def test_cvm_cantilever_thesis():
+    r = run("cvm_cantilever_foundation.toml")
+    assert r.method == "cvm" and r.extra["cvm"]["transform"] == "T2"
+    assert r.min["w"] == pytest.approx(-0.03503, rel=2e-3)   # thesis table 4.21a
+    assert r.zones == [[0.6875, 1.0]]
+    assert abs(r.extra["cvm"]["energy_gap"]) < 1e-6 * abs(r.energy)
+
+
+def test_clamped_foundation_thesis():
+    r = run("clamped_foundation.toml")
+    assert r.min["w"] == pytest.approx(-0.008452, rel=2e-3)   # thesis table 4.13a
+    assert r.zones == [[0.375, 0.625]]
+
+
+def test_library_api_example(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    runpy.run_path(str(EXAMPLES / "library_api.py"), run_name="__main__")
+    out = capsys.readouterr().out
+    assert "cvm energy gap" in out and "penetration" in out
+    png = EXAMPLES / "library_api.png"
+    assert png.exists()
+    png.unlink()
+
+
+def test_every_example_is_covered():
+    names = {p.name for p in EXAMPLES.glob("*.toml")}
+    assert len(names) >= 6
+    text = Path(__file__).read_text()
+    assert all(name in text for name in names)

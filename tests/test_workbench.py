@@ -1,0 +1,150 @@
+"""Plots, the EB-vs-Gao comparison and sweeps, from Python and the command line."""
+
+import csv
+import json
+
+import matplotlib
+import numpy as np
+import pytest
+
+matplotlib.use("Agg")
+
+from conftest import scene_dict  # noqa: E402
+from gaocvx import Scene, SceneError, solve  # noqa: E402
+from gaocvx.cli import main  # noqa: E402
+from gaocvx.plot import plot  # noqa: E402
+from gaocvx.sweep import parse_range, sweep  # noqa: E402
+
+SCENE = """
+[beam]
+supports = "P1"
+length = 1.0
+E = 2.1e11
+nu = 0.3
+half_thickness = 0.1
+width = 1.0
+[load]
+q = -5e8
+[foundation]
+gap = 0.007
+stiffness = 5e8
+[mesh]
+elements = 16
+"""
+
+
+@pytest.fixture
+def scene_file(tmp_path):
+    path = tmp_path / "scene.toml"
+    path.write_text(SCENE)
+    return path
+
+
+def test_plot_returns_axes_and_draws_the_curve():
+    r = solve(Scene.from_dict(scene_dict(foundation=(0.007, 5e8), q=-5e8)))
+    ax = plot(r)
+    ys = ax.lines[1].get_ydata()
+    assert ax.get_xlabel() == "x [m]"
+    assert min(ys) == pytest.approx(r.min["w"], rel=1e-3)
+    matplotlib.pyplot.close(ax.figure)
+
+
+@pytest.mark.parametrize("suffix", [".png", ".svg"])
+def test_cli_plot_files(tmp_path, scene_file, capsys, suffix):
+    out = tmp_path / f"a{suffix}"
+    assert main(["solve", str(scene_file), "--plot", str(out), "--panels",
+                 "slope,moment,shear,reaction"]) == 0
+    assert out.stat().st_size > 1000
+    head = out.read_bytes()[:8]
+    assert head.startswith(b"\x89PNG") if suffix == ".png" else b"<?xml" in head or b"<svg" in head
+
+
+def test_cli_plot_bad_suffix_and_panel(tmp_path, scene_file, capsys):
+    assert main(["solve", str(scene_file), "--plot", str(tmp_path / "a.jpg")]) == 2
+    assert capsys.readouterr().err.startswith("error: --plot: ")
+    assert main(["solve", str(scene_file), "--plot", str(tmp_path / "a.png"),
+                 "--panels", "torque"]) == 2
+    assert capsys.readouterr().err.startswith("error: --panels: ")
+
+
+def test_compare(tmp_path, scene_file, capsys):
+    assert main(["compare", str(scene_file), "--json", "--plot", str(tmp_path / "c.png")]) == 0
+    data = json.loads(capsys.readouterr().out)
+    eb, gao = data["euler-bernoulli"], data["gao"]
+    assert eb["model"] == "euler-bernoulli" and gao["model"] == "gao"
+    # The Gao model scales the load by (1 - nu^2) and stiffens: it sinks less.
+    assert gao["min"]["w"] > eb["min"]["w"]
+    assert data["comparison"]["min_w_ratio"] == pytest.approx(gao["min"]["w"] / eb["min"]["w"])
+    assert (tmp_path / "c.png").exists()
+
+
+def test_sweep_penetration_falls_as_stiffness_rises(tmp_path, scene_file, capsys):
+    csv_path = tmp_path / "s.csv"
+    code = main(["sweep", str(scene_file), "--vary", "foundation.stiffness=1e8:1e13:8:log",
+                 "--json", "--csv", str(csv_path), "--plot", str(tmp_path / "s.png")])
+    out, err = capsys.readouterr()
+    assert code == 0
+    lines = [json.loads(line) for line in out.strip().splitlines()]
+    assert [round(r["value"]) for r in lines] == [round(v) for v in
+                                                  parse_range("1e8:1e13:8:log")]
+    assert all(r["status"] == "optimal" and r["key"] == "foundation.stiffness" for r in lines)
+    depth = [-0.007 - r["min"]["w"] for r in lines]
+    assert all(a > b for a, b in zip(depth, depth[1:])) and depth[-1] > 0
+    assert "sweep foundation.stiffness" in err and "8/8" in err   # the progress bar
+    rows = list(csv.DictReader(csv_path.open()))
+    assert len(rows) == 8 and float(rows[0]["penetration"]) == pytest.approx(depth[0])
+    assert (tmp_path / "s.png").exists()
+
+
+def test_sweep_approaches_the_rigid_obstacle():
+    base = Scene.from_dict(scene_dict(foundation=(0.007, 1e10), q=-5e8, elements=16))
+    obstacle = solve(Scene.from_dict(scene_dict(obstacle=0.007, q=-5e8, elements=16)))
+    results = [r for _, r in sweep(base, "foundation.stiffness", [1e10, 1e12, 1e14, 1e16])]
+    dist = [np.abs(r.w - obstacle.w).max() for r in results]
+    assert all(a > b for a, b in zip(dist, dist[1:])) and dist[-1] < 1e-3 * 0.007
+
+
+@pytest.mark.parametrize("key, spec", [("load.scale", "0.5:1.5:3"), ("foundation.gap", "0:0.01:3"),
+                                       ("load.axial", "-1e9:1e9:3"), ("beam.nu", "0:0.4:3")])
+def test_sweep_keys(key, spec):
+    base = Scene.from_dict(scene_dict(foundation=(0.007, 5e8), q=-5e8, elements=8))
+    items = list(sweep(base, key, parse_range(spec)))
+    assert len(items) == 3 and all(r.success for _, r in items)
+    if key == "load.scale":
+        a, b, c = (r.min["w"] for _, r in items)
+        assert a > b > c  # more load, more deflection
+
+
+def test_sweep_parallel_matches_serial():
+    base = Scene.from_dict(scene_dict(foundation=(0.007, 5e8), q=-5e8, elements=16))
+    values = parse_range("1e8:1e12:6:log")
+    serial = [r.min["w"] for _, r in sweep(base, "foundation.stiffness", values)]
+    parallel = [r.min["w"] for _, r in sweep(base, "foundation.stiffness", values, jobs=2)]
+    assert serial == pytest.approx(parallel, rel=1e-9)
+
+
+def test_sweep_bad_arguments(scene_file, capsys):
+    for argv, key in [(["--vary", "foundation.stiffness=1:2"], "--vary"),
+                      (["--vary", "foundation.stifness=1:2:3"], "foundation.stifness"),
+                      (["--vary", "obstacle.gap=0:1:3"], "obstacle.gap"),
+                      (["--vary", "foundation.gap=a:b:3"], "--vary"),
+                      (["--vary", "foundation.gap=0:1:3:lin"], "--vary"),
+                      (["--vary", "foundation.gap=-1:1:3:log"], "--vary"),
+                      (["--vary", "foundation.gap=0:1:3", "--jobs", "0"], "--jobs")]:
+        assert main(["sweep", str(scene_file), *argv]) == 2, argv
+        err = capsys.readouterr().err.strip().splitlines()
+        assert err[-1].startswith(f"error: {key}: "), (argv, err)
+
+
+def test_sweep_reports_bad_values_and_goes_on(scene_file, capsys):
+    code = main(["sweep", str(scene_file), "--vary", "foundation.gap=-0.01:0.01:3", "--json"])
+    lines = [json.loads(line) for line in capsys.readouterr().out.strip().splitlines()]
+    assert code == 2
+    assert lines[0]["status"] == "error" and lines[0]["error"].startswith("foundation.gap: ")
+    assert lines[1]["status"] == lines[2]["status"] == "optimal"
+
+
+def test_dask_missing_or_unreachable_is_a_clear_error():
+    base = Scene.from_dict(scene_dict(foundation=(0.007, 5e8), q=-5e8, elements=8))
+    with pytest.raises(SceneError, match="^--dask"):
+        list(sweep(base, "foundation.stiffness", [1e8, 1e9], dask="tcp://127.0.0.1:9"))
