@@ -192,7 +192,7 @@ def _dask_map(address, scene, key, blocks, method):
         raise SceneError("--dask", "needs the optional dependency dask[distributed] "
                          "(pip install 'gaocvx[dask]')", address) from None
     try:
-        client = Client(address, timeout=10)
+        client = Client(address, timeout=5)
     except OSError as exc:
         raise SceneError("--dask", f"cannot reach the Dask scheduler: {exc}", address) from None
     try:

@@ -148,3 +148,17 @@ def test_dask_missing_or_unreachable_is_a_clear_error():
     base = Scene.from_dict(scene_dict(foundation=(0.007, 5e8), q=-5e8, elements=8))
     with pytest.raises(SceneError, match="^--dask"):
         list(sweep(base, "foundation.stiffness", [1e8, 1e9], dask="tcp://127.0.0.1:9"))
+
+
+def test_sweep_on_a_local_dask_cluster():
+    """The same sweep through a Dask scheduler gives the serial answers, in order."""
+    distributed = pytest.importorskip("dask.distributed")
+    base = Scene.from_dict(scene_dict(foundation=(0.007, 5e8), q=-5e8, elements=16))
+    values = parse_range("1e8:1e12:5:log")
+    serial = [r.min["w"] for _, r in sweep(base, "foundation.stiffness", values)]
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        remote = [(v, r) for v, r in sweep(base, "foundation.stiffness", values,
+                                           dask=cluster.scheduler_address)]
+    assert [v for v, _ in remote] == pytest.approx(list(values))
+    assert [r.min["w"] for _, r in remote] == pytest.approx(serial, rel=1e-9)
