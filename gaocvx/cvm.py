@@ -53,7 +53,8 @@ import scipy.sparse.linalg as spla
 from . import fem
 from .discrete import DiscreteProblem
 from .errors import SceneError
-from .linalg import BandedCholesky, NotPositiveDefinite
+from .linalg import BandedCholesky
+from .newton import line_search
 
 __all__ = ["make_transform", "solve_cvm", "TRANSFORMS", "CONTROLS", "MINIMIZERS"]
 
@@ -435,42 +436,14 @@ def conditional_gradient(tr, u, C, bounded, tol, max_iter):
         # J = Pi(U(u)) + const with U affine: search along U + gamma S d,
         # phi'(gamma) = grad Pi(U + gamma Sd)' Sd, without further state solves.
         Sd = tr.apply_S(d)
-        gamma = _root_in_unit(lambda t: float(dp.gradient(U + t * Sd) @ Sd), float(g @ d))
+        gamma = line_search(lambda t: float(dp.gradient(U + t * Sd) @ Sd), float(g @ d),
+                            rtol=1e-8, max_eval=40)
+        if gamma is None:  # no decrease along the vertex direction at this precision
+            break
         u = u + gamma * d
         U = U + gamma * Sd
     gap, _ = _box_gap(tr, u, tr.gradient(u, U), C, bounded)
-    return u, max_iter, gap <= tol * scale, gap / scale
-
-
-def _root_in_unit(dphi, d0, iters=40, rtol=1e-8):
-    """argmin of a convex phi on [0, 1] from its derivative (``d0 = phi'(0) < 0``).
-
-    Illinois (modified regula falsi) on the increasing phi'; stops when
-    ``|phi'| <= rtol |phi'(0)|`` or the bracket is below round-off.
-    """
-    d1 = dphi(1.0)
-    if d1 <= 0:
-        return 1.0
-    lo, hi, flo, fhi = 0.0, 1.0, d0, d1
-    side = 0
-    for _ in range(iters):
-        t = (lo * fhi - hi * flo) / (fhi - flo)
-        if not lo < t < hi:
-            t = 0.5 * (lo + hi)
-        ft = dphi(t)
-        if abs(ft) <= rtol * abs(d0) or hi - lo <= 1e-13:
-            return t
-        if ft < 0:
-            lo, flo = t, ft
-            if side == -1:
-                fhi *= 0.5
-            side = -1
-        else:
-            hi, fhi = t, ft
-            if side == 1:
-                flo *= 0.5
-            side = 1
-    return 0.5 * (lo + hi)
+    return u, it, gap <= tol * scale, gap / scale
 
 
 def projected_newton(tr, u, C, bounded, tol, max_iter):
@@ -492,11 +465,10 @@ def projected_newton(tr, u, C, bounded, tol, max_iter):
         H = tr.reduced_hessian(U)
         d = np.zeros_like(u)
         Hf = H[np.ix_(free, free)]
-        try:
-            L = np.linalg.cholesky(Hf)
-        except np.linalg.LinAlgError:
-            Hf = Hf + 1e-12 * np.trace(Hf) / max(len(Hf), 1) * np.eye(len(Hf))
-            L = np.linalg.cholesky(Hf)
+        L = _regularised_cholesky(Hf)
+        if L is None:  # not even a regularised factor: say so
+            tr.note = "the reduced Hessian could not be factored (too ill-conditioned at this size)"
+            return u, it, False, measure
         d[free] = -_cho(L, g[free])
         dec2 = float(-(g[free] @ d[free]))
         total = abs(tr.cost(u, U)) or 1.0
@@ -520,6 +492,26 @@ def projected_newton(tr, u, C, bounded, tol, max_iter):
             return u, it, False, measure
         u = trial
     return u, max_iter, measure <= tol, measure
+
+
+def _regularised_cholesky(H):
+    """Cholesky factor of H, adding a growing multiple of its diagonal scale if needed.
+
+    The reduced Hessian S'HS inherits the N^4 conditioning of the state
+    equation, and on fine meshes round-off can cost it its definiteness; a
+    shift of up to 1e-6 of the largest diagonal entry still gives a descent
+    direction (the optimality test, not the factor, decides convergence).
+    """
+    top = float(np.max(np.diag(H), initial=0.0)) or 1.0
+    shift = 0.0
+    for _ in range(10):
+        try:
+            return np.linalg.cholesky(H + shift * np.eye(len(H)))
+        except np.linalg.LinAlgError:
+            shift = 1e-14 * top if shift == 0.0 else shift * 10.0
+            if shift > 1e-6 * top:
+                return None
+    return None
 
 
 def _cho(L, b):
@@ -586,6 +578,8 @@ def solve_cvm(dp: DiscreteProblem, transform: str = "auto", control: str = "P1",
     message = (f"cvm {tr.name}/{control} {minimizer}: "
                + ("optimality test passed" if ok else "optimality test NOT passed")
                + f" (measure {measure:.2e}, tol {tol:.0e}, {total_iter} iterations)")
+    if getattr(tr, "note", None):
+        message += f"; {tr.note}"
     if active:
         message += "; the control bound C is active at the optimum"
     return {

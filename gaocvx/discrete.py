@@ -275,17 +275,6 @@ class DiscreteProblem:
         lam = smallest_generalized_eigenvalue(self.K, self.G)
         return lam * self.EI / self.L**2 / self.mu
 
-    @functools.cached_property
-    def quadratic_factor(self) -> BandedCholesky:
-        """Cholesky factor of the quadratic part ``K - p G`` (positive definite below P_bar_h)."""
-        if self.p == 0:
-            return self._K_chol
-        try:
-            return BandedCholesky(self.K - self.p * self.G)
-        except NotPositiveDefinite:
-            raise SceneError("load.axial", f"P = {self.P:.4g} N makes the discrete energy "
-                             f"non-convex (P_bar_h = {self.P_bar_h:.4g} N)", self.P) from None
-
     @property
     def q_table(self) -> np.ndarray | None:
         """Non-dimensional load q_hat as a piecewise-linear table [[xi, q], ...] (None: no q)."""

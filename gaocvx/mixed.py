@@ -128,6 +128,8 @@ class MixedForm:
         fz[1::3] = F[1::2]
         self.f = fz[self.free]
         self._order = self._kkt_order()
+        self._inverse_order = np.empty_like(self._order)
+        self._inverse_order[self._order] = np.arange(len(self._order))
 
     # ---------------------------------------------------------------- conversion
     def to_hermite(self, z) -> np.ndarray:
@@ -222,10 +224,9 @@ class MixedForm:
     def kkt_factor(self, H) -> "_KKTFactor":
         """Banded LU of ``[[H, C'], [C, 0]]`` in the interleaved order (reusable)."""
         K = sp.bmat([[H, self.C.T], [self.C, None]], format="coo")
-        K.sum_duplicates()
-        p = self._order
-        inv = np.empty_like(p)
-        inv[p] = np.arange(len(p))
+        if not K.has_canonical_format:
+            K.sum_duplicates()
+        p, inv = self._order, self._inverse_order
         r, c = inv[K.row], inv[K.col]
         lo, up = int(np.max(r - c, initial=0)), int(np.max(c - r, initial=0))
         ab = np.zeros((2 * lo + up + 1, len(p)))

@@ -30,7 +30,7 @@ from .discrete import (COMPLEMENTARITY_TOL, FEASIBILITY_TOL, STATIONARITY_TOL, D
                        complementarity)
 from .mixed import MixedForm
 
-__all__ = ["solve_newton", "certify"]
+__all__ = ["solve_newton", "certify", "passes", "line_search"]
 
 TOL = 1e-10
 MAX_ITER = 100
@@ -139,7 +139,7 @@ def _newton(mf: MixedForm, z, tol, max_iter, al):
         if decrement < ROUNDOFF and decrement > 0.5 * previous:
             return z, it - 1, f"decrement stagnated at {decrement:.1e} (round-off)"
         previous = decrement
-        t = _line_search(lambda s: float(mf.gradient(z + s * d, **al) @ d), float(g @ d))
+        t = line_search(lambda s: float(mf.gradient(z + s * d, **al) @ d), float(g @ d))
         if t is None:
             return z, it, "line search stalled (round-off level)"
         z = z + t * d
@@ -170,14 +170,16 @@ def _predict_active_set(mf, z, d, al, rounds=8):
     return d
 
 
-def _line_search(dphi, slope0, max_eval=30):
-    """Step length along a descent direction from phi'(t) (``slope0 = phi'(0) < 0``).
+def line_search(dphi, slope0, rtol=0.1, max_eval=30):
+    """Step length in (0, 1] along a descent direction from phi'(t) (``slope0 = phi'(0) < 0``).
 
     The energy is convex along the line, so phi' increases and phi'(t) <= 0
     proves a decrease without comparing energies (which drown in round-off on
     fine meshes).  The full step is taken when it does not overshoot the
-    minimum along the line; otherwise Illinois steps find t with
-    |phi'(t)| <= 0.1 |phi'(0)| and phi'(t) <= 0.
+    minimum along the line; otherwise Illinois (modified regula falsi) steps
+    find t with ``rtol * phi'(0) <= phi'(t) <= 0`` (rtol = 0.1 for Newton; a
+    small rtol approaches the exact line search of conditional gradient).
+    Returns None when no such t > 0 is found.
     """
     if slope0 >= 0:
         return None
@@ -192,7 +194,7 @@ def _line_search(dphi, slope0, max_eval=30):
         f_t = dphi(t)
         if f_t <= 0.0:
             lo, f_lo = t, f_t
-            if f_t >= 0.1 * slope0:
+            if f_t >= rtol * slope0:
                 return t
             if side == -1:
                 f_hi *= 0.5
@@ -202,6 +204,8 @@ def _line_search(dphi, slope0, max_eval=30):
             if side == 1:
                 f_lo *= 0.5
             side = 1
+        if hi - lo <= 1e-13:
+            break
     return lo if lo > 0 else None
 
 
