@@ -36,3 +36,23 @@ def scene_dict(supports="P1", model="gao", q=-5e7, points=(), axial=0.0, foundat
 @pytest.fixture
 def thesis_scene():
     return copy.deepcopy(scene_dict())
+
+
+# A scene file of the thesis's beam on a foundation (table 4.13a), for CLI tests.
+FOUNDATION_TOML = """
+[beam]
+model = "gao"
+supports = "P1"
+length = 1.0
+E = 2.1e11
+nu = 0.3
+half_thickness = 0.1
+width = 1.0
+
+[load]
+q = -5e8
+
+[foundation]
+gap = 0.007
+stiffness = 5e8
+"""

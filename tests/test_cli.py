@@ -5,27 +5,12 @@ from pathlib import Path
 
 import pytest
 
+from conftest import FOUNDATION_TOML
 from gaocvx.cli import main
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 
-SCENE = """
-[beam]
-model = "gao"
-supports = "P1"
-length = 1.0
-E = 2.1e11
-nu = 0.3
-half_thickness = 0.1
-width = 1.0
-
-[load]
-q = -5e8
-
-[foundation]
-gap = 0.007
-stiffness = 5e8
-"""
+SCENE = FOUNDATION_TOML
 
 JSON_KEYS = {"status", "method", "model", "supports", "elements", "nodes", "max", "min", "energy",
              "energy_parts", "contact", "P_bar", "time_s"}

@@ -9,28 +9,13 @@ import pytest
 
 matplotlib.use("Agg")
 
-from conftest import scene_dict  # noqa: E402
+from conftest import FOUNDATION_TOML, scene_dict  # noqa: E402
 from gaocvx import Scene, SceneError, solve  # noqa: E402
 from gaocvx.cli import main  # noqa: E402
 from gaocvx.plot import plot  # noqa: E402
 from gaocvx.sweep import parse_range, sweep  # noqa: E402
 
-SCENE = """
-[beam]
-supports = "P1"
-length = 1.0
-E = 2.1e11
-nu = 0.3
-half_thickness = 0.1
-width = 1.0
-[load]
-q = -5e8
-[foundation]
-gap = 0.007
-stiffness = 5e8
-[mesh]
-elements = 16
-"""
+SCENE = FOUNDATION_TOML + "[mesh]\nelements = 16\n"
 
 
 @pytest.fixture
