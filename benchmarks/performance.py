@@ -1,0 +1,224 @@
+"""Run time against error for every method, and the targets of the performance issue.
+
+    python benchmarks/performance.py [--quick] [--output docs/performance.md]
+
+Times are wall-clock medians of repeated runs on the machine that runs this;
+each is also given as a ratio to one sparse solve (scipy spsolve) of the
+Euler-Bernoulli system with the same number of elements, measured in the same
+run, because shared machines are noisy.  Errors are the max nodal difference
+from a converged reference (Newton on 16384 elements, certified), relative to
+max |w|: discretisation and solver error together.
+"""
+
+import argparse
+import platform
+import statistics
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+import scipy
+import scipy.sparse.linalg as spla
+
+import gaocvx
+from gaocvx import DiscreteProblem, Scene, solve
+from gaocvx.sweep import sweep
+
+BEAM = {"length": 1.0, "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1, "width": 1.0}
+GAO_FOUNDATION = {"beam": {**BEAM, "model": "gao", "supports": "P1"}, "load": {"q": -5e8},
+                  "foundation": {"gap": 0.007, "stiffness": 5e10}}
+EB_PLAIN = {"beam": {**BEAM, "model": "euler-bernoulli", "supports": "P4"}, "load": {"q": -5e7}}
+OBSTACLE = {"beam": {**BEAM, "model": "gao", "supports": "P1"}, "load": {"q": -5e8},
+            "obstacle": {"gap": 0.007}}
+SIZES = [8, 32, 128, 512, 2048, 8192, 16384]
+# Largest N per method: the CVM Newton minimiser forms a dense reduced Hessian
+# (O(N^2) memory, O(N^3) time) whose N^4 conditioning defeats its factorisation
+# beyond ~1000 elements (it then says so), and conditional gradient needs
+# thousands of iterations; OSQP (ADMM) needs 35 s at 2048 elements (measured);
+# beyond these sizes they take minutes or fail.
+CAPS = {"cvm/projected-newton": 512, "cvm/conditional-gradient": 128, "convex/osqp": 512}
+
+
+def scene(data, n, **solve_opts):
+    d = {**data, "mesh": {"elements": n}}
+    if solve_opts:
+        d["solve"] = solve_opts
+    return Scene.from_dict(d)
+
+
+def timed(fn, repeat):
+    times, out = [], None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), out
+
+
+def sparse_solve_time(n, repeat=7):
+    dp = DiscreteProblem(scene(EB_PLAIN, n))
+    K, f = dp.K.tocsc(), dp.f
+    t, _ = timed(lambda: spla.spsolve(K, f), repeat)
+    return t
+
+
+def work_precision(data, methods, sizes, reference):
+    rows = []
+    for n in sizes:
+        base = sparse_solve_time(n)
+        for label, opts in methods:
+            if n > CAPS.get(label, 10**9):
+                continue
+            sc = scene(data, n, **opts)
+            repeat = 5 if n <= 512 and "conditional" not in label else 1
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    solve(sc)  # warm the imports and caches once
+                    t, r = timed(lambda: solve(sc), repeat)
+            except gaocvx.SolverError as exc:
+                rows.append({"method": label, "N": n, "time_s": float("nan"), "ratio": float("nan"),
+                             "error": float("nan"), "status": f"failed: {exc}", "iterations": None})
+                print(f"{label:26s} N={n:6d} failed: {exc}", file=sys.stderr)
+                continue
+            err = float(np.abs(r.w - reference.deflection(r.x)).max() / np.abs(reference.w).max())
+            rows.append({"method": label, "N": n, "time_s": t, "ratio": t / base,
+                         "error": err, "status": r.status, "iterations": r.nit})
+            print(f"{label:26s} N={n:6d} {t*1e3:9.1f} ms ratio {t/base:8.1f} "
+                  f"error {err:.2e} {r.status}", file=sys.stderr)
+    return rows
+
+
+def targets():
+    n = 2048
+    base = sparse_solve_time(n, repeat=15)
+    out = {}
+    for name, data, method, target in [
+            ("Euler-Bernoulli, no contact, auto", EB_PLAIN, None, 5),
+            ("Gao on a foundation, Newton", GAO_FOUNDATION, "newton", 50),
+            ("Gao on a foundation, convex (Clarabel)", GAO_FOUNDATION, "convex", 400)]:
+        sc = scene(data, n)
+        solve(sc, method)
+        t, r = timed(lambda: solve(sc, method), 5 if method != "convex" else 3)
+        out[name] = (t, t / base, target, r.status, r.method)
+    return base, out
+
+
+def sweep_reuse():
+    """20 stiffness values: a sweep (warm starts, one scale) against cold solves."""
+    out = {}
+    for n in (256, 2048):
+        sc = scene(GAO_FOUNDATION, n)
+        values = np.geomspace(1e8, 1e13, 20)
+        t0 = time.perf_counter()
+        items = list(sweep(sc, "foundation.stiffness", values, method="newton"))
+        t_sweep = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        cold = [solve(sc.with_overrides({"foundation.stiffness": float(v)}), "newton") for v in values]
+        t_cold = time.perf_counter() - t0
+        out[n] = (t_sweep, t_cold, sum(r.nit for _, r in items), sum(r.nit for r in cold))
+    return out
+
+
+def plot(rows, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(7, 5))
+    for label in dict.fromkeys(r["method"] for r in rows):
+        rs = [r for r in rows if r["method"] == label]
+        ax.loglog([r["ratio"] for r in rs], [max(r["error"], 1e-16) for r in rs], "o-", label=label)
+        for r in rs:
+            ax.annotate(str(r["N"]), (r["ratio"], max(r["error"], 1e-16)), fontsize=6)
+    ax.set_xlabel("run time / one sparse solve of the same N")
+    ax.set_ylabel("max nodal error (relative), against N = 16384")
+    ax.set_title("Gao beam on a unilateral foundation: work against precision", fontsize=10)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path)
+
+
+def machine():
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    import clarabel
+    import cvxpy
+    import osqp
+    return (f"{cpu}; Python {platform.python_version()}, numpy {np.__version__}, "
+            f"scipy {scipy.__version__}, cvxpy {cvxpy.__version__}, clarabel {clarabel.__version__}, "
+            f"osqp {osqp.__version__}, gaocvx {gaocvx.__version__}")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true", help="sizes up to 512 only")
+    ap.add_argument("--output", help="Markdown file to write (a PNG is written beside it)")
+    args = ap.parse_args()
+    sizes = [n for n in SIZES if n <= 512] if args.quick else SIZES
+    reference = solve(scene(GAO_FOUNDATION, 16384), "newton")
+    assert reference.success, reference.message
+    methods = [("newton", {"method": "newton"}),
+               ("convex/clarabel", {"method": "convex"}),
+               ("cvm/projected-newton", {"method": "cvm"}),
+               ("cvm/conditional-gradient", {"method": "cvm", "minimizer": "conditional-gradient"})]
+    rows = work_precision(GAO_FOUNDATION, methods, sizes, reference)
+    eb_ref = solve(scene(EB_PLAIN, 16384))
+    eb_rows = work_precision(EB_PLAIN, [("auto (one solve)", {}), ("convex/osqp", {"method": "convex", "solver": "osqp"}),
+                                         ("convex/clarabel", {"method": "convex"})],
+                             [n for n in sizes if n <= 8192], eb_ref)
+    ob_ref = solve(scene(OBSTACLE, 16384), "newton")
+    ob_rows = work_precision(OBSTACLE, [("newton", {"method": "newton"}), ("convex/clarabel", {"method": "convex"})],
+                             [n for n in sizes if n <= 8192], ob_ref)
+    base, target = targets()
+    reuse = sweep_reuse()
+    command = "python benchmarks/performance.py" + (" --quick" if args.quick else "") + \
+        (f" --output {args.output}" if args.output else "")
+    md = [f"# Performance: run time against error\n",
+          f"Made by `{command}` on {time.strftime('%Y-%m-%d')}. Machine: {machine()}.",
+          "Times are medians of repeated runs of `gaocvx.solve` (setup, solve, certificate and",
+          "result included); *ratio* divides by one `scipy.sparse.linalg.spsolve` of the",
+          "Euler–Bernoulli system with the same N, measured in the same run. *error* is the",
+          "max nodal difference from a converged reference (Newton, 16384 elements, certified",
+          "optimal) relative to max |w|: discretisation and solver error together.\n",
+          "## Targets at N = 2048\n",
+          f"One sparse solve: {base*1e3:.2f} ms.\n",
+          "| scene and method | time | ratio | target | status (method used) |", "|---|---|---|---|---|"]
+    for name, (t, ratio, tgt, status, method) in target.items():
+        md.append(f"| {name} | {t*1e3:.1f} ms | {ratio:.1f}x | {tgt}x | {status} ({method}) |")
+    for title, rs in [("Gao beam on a unilateral foundation (P1, q = -5e8 N/m, gap 7 mm, k_F = 5e10 N/m^2)", rows),
+                      ("Euler–Bernoulli beam without contact (P4, q = -5e7 N/m)", eb_rows),
+                      ("Gao beam on a rigid obstacle (P1, q = -5e8 N/m, gap 7 mm)", ob_rows)]:
+        md += [f"\n## {title}\n", "| method | N | time | ratio | error | status | iterations |",
+               "|---|---|---|---|---|---|---|"]
+        for r in rs:
+            md.append(f"| {r['method']} | {r['N']} | {r['time_s']*1e3:.1f} ms | {r['ratio']:.1f}x | "
+                      f"{r['error']:.1e} | {r['status']} | {r['iterations']} |")
+    md += ["\n## Sweeps: 20 foundation stiffnesses (1e8 to 1e13, Newton)\n",
+           "| N | sweep (warm starts, one scale) | 20 cold solves | Newton iterations sweep / cold |",
+           "|---|---|---|---|"]
+    for n, (ts, tc, its, itc) in reuse.items():
+        md.append(f"| {n} | {ts:.2f} s | {tc:.2f} s ({ts/tc:.2f}x) | {its} / {itc} |")
+    md += ["\nWhat the numbers say: Newton's iterations already end in 2–5 steps from a cold",
+           "start, so warm starts save little. The convex program cannot be warm-started",
+           "(Clarabel is an interior-point method), and its parametric (DPP) compilation costs",
+           "about 25x a constant one. Sweeps therefore reuse it only from 50 values on",
+           "(`gaocvx.sweep.CONVEX_REUSE_MIN`).\n",
+           "![work-precision](performance.png)\n"]
+    text = "\n".join(md)
+    if args.output:
+        Path(args.output).write_text(text)
+        plot(rows, Path(args.output).with_name("performance.png"))
+    print(text)
+
+
+if __name__ == "__main__":
+    main()
