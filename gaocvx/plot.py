@@ -31,7 +31,11 @@ _SUFFIXES = (".png", ".svg")
 
 
 def _pyplot():
-    import matplotlib
+    try:
+        import matplotlib
+    except ImportError:
+        raise SceneError("--plot", "pictures need matplotlib: pip install 'gaocvx[plot]'",
+                         "matplotlib not installed") from None
     if matplotlib.get_backend().lower() not in ("agg", "svg", "pdf", "module://matplotlib_inline.backend_inline"):
         matplotlib.use("Agg")  # files only: never open a window
     import matplotlib.pyplot as plt

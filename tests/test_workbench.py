@@ -147,3 +147,18 @@ def test_sweep_on_a_local_dask_cluster():
                                            dask=cluster.scheduler_address)]
     assert [v for v, _ in remote] == pytest.approx(list(values))
     assert [r.min["w"] for _, r in remote] == pytest.approx(serial, rel=1e-9)
+
+
+def test_plot_without_matplotlib_is_a_clear_error(tmp_path, scene_file, capsys, monkeypatch):
+    import builtins
+    real_import = builtins.__import__
+
+    def no_matplotlib(name, *args, **kwargs):
+        if name == "matplotlib" or name.startswith("matplotlib."):
+            raise ImportError(name)
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_matplotlib)
+    assert main(["solve", str(scene_file), "--plot", str(tmp_path / "a.png")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: --plot: pictures need matplotlib") and "Traceback" not in err
