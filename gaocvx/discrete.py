@@ -3,9 +3,11 @@
 :class:`DiscreteProblem` turns a :class:`~gaocvx.scene.Scene` into arrays on
 the free degrees of freedom, in units where the beam has unit length and unit
 bending stiffness and the deflection is measured in a scale ``W`` of the
-answer's size.  Every solver (convex, Newton) works on these arrays; the
-energy, gradient and Hessian here are the single definition of the discrete
-problem, and also its optimality test.
+answer's size: the mesh, the scaling, the coefficients (p, a, c, g), the load
+vector and the convexity limit P_bar_h.  The energy, gradient and Hessian in
+Hermite DOFs here serve CVM and the scoring of results; the ground-truth
+solvers (convex, Newton) work on the same energy in the better-conditioned
+variables of :class:`~gaocvx.mixed.MixedForm`, built from this object.
 
 Scaling (x = L xi, w = W w_hat, energies in E0 = EI W^2 / L^3)::
 
