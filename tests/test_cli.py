@@ -38,7 +38,8 @@ def test_solve_json_contract(capsys, scene):
     assert data["status"] == "optimal"
     assert set(data["energy_parts"]) == {"bending", "gao", "axial", "load", "foundation"}
     assert data["energy"] == pytest.approx(sum(data["energy_parts"].values()))
-    assert data["min"]["x"] == 0.5 and data["min"]["w"] == pytest.approx(-8.444e-3, rel=1e-3)
+    # thesis table 4.13a: -0.008452 m at x = 0.5 (reference-cases.md: Gao within 1 %)
+    assert data["min"]["x"] == 0.5 and data["min"]["w"] == pytest.approx(-0.008452, rel=1e-2)
     assert data["contact"]["zones"] == [[0.375, 0.625]]
     n = data["elements"] + 1
     assert len(data["nodes"]["x"]) == len(data["nodes"]["w"]) == len(data["nodes"]["slope"]) == n
