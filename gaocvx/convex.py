@@ -66,13 +66,6 @@ OSQP_LADDER = [dict(eps_abs=1e-6, eps_rel=1e-6, max_iter=200_000, polishing=True
 _CACHE_SIZE = 4
 
 
-class _Constant:
-    """Stands in for a cvxpy Parameter in a program built for one solve."""
-
-    def __init__(self, value=None):
-        self.value = value
-
-
 class ConvexProgram:
     """The CVXPY program of one problem structure.
 
@@ -103,7 +96,6 @@ class ConvexProgram:
         terms = [-self.f @ z]
         if self.compressed:
             # One quadratic form; its factor depends on p, which is then fixed.
-            self.p = dp.p
             terms.append(0.5 * cp.sum_squares(_compressed_factor(mf) @ z))
         else:
             terms.append(0.5 * cp.sum_squares(sp.diags(np.sqrt(mf.wq2)) @ mf.B2 @ z))
@@ -234,7 +226,7 @@ def solve_convex(dp: DiscreteProblem, solver: str = "clarabel", verbose: bool = 
         kind = "obstacle" if dp.contact == "obstacle" else "smooth"
         attempts = [dict(solver=cp.CLARABEL, **s) for s in CLARABEL_LADDER[kind]]
     best = None
-    for i, kwargs in enumerate(attempts):
+    for kwargs in attempts:
         with warnings.catch_warnings():
             # An inaccurate solve is reported through the status below, not as a warning.
             warnings.simplefilter("ignore", UserWarning)

@@ -212,7 +212,6 @@ class _T2(_Transform):
         xi = dp.xi
         ne = len(xi) - 1
         h = np.diff(xi)
-        self.h = h
         # Continuous quadratic elements: vertex i -> 2i, midpoint of element e -> 2e + 1.
         dofs = np.stack([2 * np.arange(ne), 2 * np.arange(ne) + 1, 2 * np.arange(ne) + 2], 1)
         xq, wq, e = fem.gauss_points(xi, 3)
@@ -411,7 +410,7 @@ def make_transform(dp: DiscreteProblem, transform: str = "auto", control: str = 
 
 
 # ------------------------------------------------------------------ minimisers
-def _box_gap(tr, u, g, C, bounded):
+def _box_gap(u, g, C, bounded):
     """Frank-Wolfe gap g'(u - s), s the box vertex minimising g's (>= I(u) - I*)."""
     s = np.where(bounded, -C * np.sign(g), u)
     return float(g @ (u - s)), s
@@ -429,7 +428,7 @@ def conditional_gradient(tr, u, C, bounded, tol, max_iter):
     scale = max(abs(tr.cost(u, U)), 1e-300)
     for it in range(1, max_iter + 1):
         g = tr.gradient(u, U)
-        gap, s = _box_gap(tr, u, g, C, bounded)
+        gap, s = _box_gap(u, g, C, bounded)
         if gap <= tol * scale:
             return u, it - 1, True, gap / scale
         d = s - u
@@ -442,7 +441,7 @@ def conditional_gradient(tr, u, C, bounded, tol, max_iter):
             break
         u = u + gamma * d
         U = U + gamma * Sd
-    gap, _ = _box_gap(tr, u, tr.gradient(u, U), C, bounded)
+    gap, _ = _box_gap(u, tr.gradient(u, U), C, bounded)
     return u, it, gap <= tol * scale, gap / scale
 
 

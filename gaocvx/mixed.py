@@ -141,15 +141,6 @@ class MixedForm:
         u[1::2] = full[1::3]
         return u[self.dp.free]
 
-    def from_hermite(self, u) -> np.ndarray:
-        """``z`` from free Hermite DOFs (chord slopes by differences: for warm starts)."""
-        full_u = self.dp.full(u)
-        z = np.zeros(self.nz)
-        z[0::3] = full_u[0::2]
-        z[1::3] = full_u[1::2]
-        z[2::3] = np.diff(full_u[0::2]) / np.diff(self.dp.xi)
-        return z[self.free]
-
     # ---------------------------------------------------------------- energy
     def energy_parts(self, z) -> dict:
         """Non-dimensional energy parts (multiply by E0 for J)."""
@@ -164,9 +155,6 @@ class MixedForm:
             pen = np.maximum(dp.g - self.Nq @ z, 0.0)
             parts["foundation"] = 0.5 * dp.c * (self.wqc @ pen**2)
         return {k: float(v) for k, v in parts.items()}
-
-    def energy(self, z) -> float:
-        return sum(self.energy_parts(z).values())
 
     def gradient(self, z, shift=None, rho=0.0, active=None) -> np.ndarray:
         """Gradient; with ``shift``/``rho``, of the obstacle's augmented Lagrangian too.
@@ -214,8 +202,6 @@ class MixedForm:
     # ---------------------------------------------------------------- KKT solves
     def _kkt_order(self):
         """Permutation interleaving each multiplier after its element's D (banded KKT)."""
-        full_pos = np.full(self.nz, -1)
-        full_pos[self.free] = np.arange(self.n)
         key_z = self.free.astype(float)                     # z variables in node order
         key_l = 3 * np.arange(self.N) + 2.5                 # multiplier e right after D_e
         keys = np.concatenate([key_z, key_l])
