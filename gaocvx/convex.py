@@ -145,7 +145,7 @@ class ConvexProgram:
 def _compressed_factor(mf: MixedForm) -> sp.csr_matrix:
     """Banded Cholesky factor of bending - p axial + rho C'C (PD below P_bar_h)."""
     dp = mf.dp
-    Q = mf.B2T @ sp.diags(mf.wq2) @ mf.B2 - dp.p * (mf.B1T @ sp.diags(mf.wq5) @ mf.B1)
+    Q = mf.H0
     CtC = (mf.C.T @ mf.C).tocsr()
     # C z = 0 on the feasible set, so rho C'C changes nothing there; it makes the
     # form definite off it (the rigid rotation of P4, directions that violate C).

@@ -188,10 +188,10 @@ class MixedForm:
     def hessian(self, z, shift=None, rho=0.0, active=None) -> sp.csr_matrix:
         """Generalised Hessian at ``z`` (contact terms on ``active``, default: where they act)."""
         dp = self.dp
-        H = self.B2T @ sp.diags(self.wq2) @ self.B2
-        if self.has_slope:
+        H = self.H0
+        if dp.needs_gao:
             s = self.B1 @ z
-            H = H + self.B1T @ sp.diags(self.wq5 * (dp.a * s**2 - dp.p)) @ self.B1
+            H = H + self.B1T @ sp.diags(self.wq5 * dp.a * s**2) @ self.B1
         found, obst = self.active_sets(z, shift, rho) if active is None else active
         if found is not None:
             H = H + self.NqT @ sp.diags(dp.c * self.wqc * found) @ self.Nq
@@ -224,12 +224,17 @@ class MixedForm:
         return self.kkt_factor(H).solve(rhs_z, rhs_c)
 
     @functools.cached_property
-    def quadratic_factor(self) -> "_KKTFactor":
-        """KKT factor of the bending and axial part H0 (the whole Hessian of a quadratic energy)."""
+    def H0(self) -> sp.csr_matrix:
+        """The bending and axial part of the Hessian: constant, so built once."""
         H0 = self.B2T @ sp.diags(self.wq2) @ self.B2
         if self.has_slope and self.dp.p:
             H0 = H0 - self.dp.p * (self.B1T @ sp.diags(self.wq5) @ self.B1)
-        return self.kkt_factor(H0.tocsr())
+        return H0.tocsr()
+
+    @functools.cached_property
+    def quadratic_factor(self) -> "_KKTFactor":
+        """KKT factor of H0 (the whole Hessian of a quadratic energy)."""
+        return self.kkt_factor(self.H0)
 
     @functools.cached_property
     def load_scale(self) -> float:
