@@ -161,6 +161,18 @@ class Beam:
             self._require(("nu",), "for the gao model")
             if self.E_alpha is None:
                 self._require(section, "to compute E_alpha (or give beam.E_alpha)")
+        # The derived coefficients must be finite and nonzero numbers too (a
+        # half thickness of 1e102 overflows h^3; one of 1e-120 underflows it).
+        for name, derived, inputs in (("EI", lambda: self.EI_eff, section),
+                                      ("E_alpha", lambda: self.E_alpha_eff, section)):
+            try:
+                value = derived()
+            except OverflowError:
+                value = math.inf
+            if not math.isfinite(value) or (name == "EI" and value <= 0):
+                given = {k: getattr(self, k) for k in inputs if getattr(self, k) is not None}
+                raise SceneError(f"beam.{name}", "cannot be computed within double precision "
+                                 "from the given values", given)
 
     def _require(self, names, why):
         for name in names:

@@ -90,6 +90,12 @@ def test_missing_and_conflicting():
         Scene.from_dict({**scene_dict(), "extras": {}})
 
 
+@pytest.mark.parametrize("h", [5.6e102, 1e-120])
+def test_derived_coefficients_must_be_representable(h):
+    with pytest.raises(SceneError, match="^beam.EI: cannot be computed"):
+        Scene.from_dict(mutate(scene_dict(), "beam.half_thickness", h))
+
+
 def test_eb_needs_no_nu_and_overrides_work():
     d = scene_dict(model="euler-bernoulli")
     del d["beam"]["nu"]
