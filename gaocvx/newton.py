@@ -87,12 +87,13 @@ def solve_newton(dp: DiscreteProblem, warm: dict | None = None, tol: float = TOL
         # solves from any start) and stiffens tenfold per update up to rho_max.
         z, nit, note = _newton(mf, z, tol, max_iter - total, {"shift": lam, "rho": rho})
         total += nit
-        lam = np.maximum(lam + rho * (dp.g - mf.A @ z), 0.0)
         gap = mf.A @ z - dp.g
-        violation = float(max(-np.min(gap, initial=0.0), 0.0))
-        comp = complementarity(lam, gap, mf.scale(z, mf.hessian(z)))
+        lam = np.maximum(lam - rho * gap, 0.0)
+        measures = _obstacle_measures(mf, z, lam, gap, mf.hessian(z))
+        violation = measures["feasibility"]
         # Stop with a margin below the certificate's tolerances.
-        if (violation <= 1e-3 * FEASIBILITY_TOL and comp <= 1e-2 * COMPLEMENTARITY_TOL) \
+        if (violation <= 1e-3 * FEASIBILITY_TOL
+                and measures["complementarity"] <= 1e-2 * COMPLEMENTARITY_TOL) \
                 or total >= max_iter:
             break
         if rho < rho_max or violation > 0.25 * previous:
@@ -229,13 +230,16 @@ def certify(mf: MixedForm, z, lam=None) -> dict:
     stationarity, _ = mf.decrement(z, H, g, factor=factor)
     out = {"stationarity": stationarity}
     if lam is not None:
-        gap = mf.A @ z - dp.g
-        scale = mf.scale(z, H)
-        lam_scale = np.max(np.abs(lam), initial=0.0) or 1.0
-        out["feasibility"] = float(max(-np.min(gap, initial=0.0), 0.0))
-        out["dual"] = float(max(-np.min(lam, initial=0.0), 0.0) / lam_scale)
-        out["complementarity"] = complementarity(lam, gap, scale)
+        out.update(_obstacle_measures(mf, z, lam, mf.A @ z - dp.g, H))
     return out
+
+
+def _obstacle_measures(mf: MixedForm, z, lam, gap, H) -> dict:
+    """Feasibility, dual sign and complementarity of ``z`` with multipliers ``lam``."""
+    lam_scale = np.max(np.abs(lam), initial=0.0) or 1.0
+    return {"feasibility": float(max(-np.min(gap, initial=0.0), 0.0)),
+            "dual": float(max(-np.min(lam, initial=0.0), 0.0) / lam_scale),
+            "complementarity": complementarity(lam, gap, mf.scale(z, H))}
 
 
 def passes(residual: dict) -> bool:
