@@ -430,7 +430,7 @@ def conditional_gradient(tr, u, C, bounded, tol, max_iter):
         g = tr.gradient(u, U)
         gap, s = _box_gap(u, g, C, bounded)
         if gap <= tol * scale:
-            return u, it - 1, True, gap / scale
+            return u, it - 1, True, gap / scale, None
         d = s - u
         # J = Pi(U(u)) + const with U affine: search along U + gamma S d,
         # phi'(gamma) = grad Pi(U + gamma Sd)' Sd, without further state solves.
@@ -442,7 +442,7 @@ def conditional_gradient(tr, u, C, bounded, tol, max_iter):
         u = u + gamma * d
         U = U + gamma * Sd
     gap, _ = _box_gap(u, tr.gradient(u, U), C, bounded)
-    return u, it, gap <= tol * scale, gap / scale
+    return u, it, gap <= tol * scale, gap / scale, None
 
 
 def projected_newton(tr, u, C, bounded, tol, max_iter):
@@ -466,19 +466,18 @@ def projected_newton(tr, u, C, bounded, tol, max_iter):
         Hf = H[np.ix_(free, free)]
         L = _regularised_cholesky(Hf)
         if L is None:  # not even a regularised factor: say so
-            tr.note = "the reduced Hessian could not be factored (too ill-conditioned at this size)"
-            return u, it, False, measure
+            return u, it, False, measure, ("the reduced Hessian could not be factored "
+                                           "(too ill-conditioned at this size)")
         d[free] = -_cho(L, g[free])
         dec2 = float(-(g[free] @ d[free]))
-        total = abs(tr.cost(u, U)) or 1.0
-        measure = math.sqrt(max(dec2, 0.0) / total)
+        cost0 = tr.cost(u, U)
+        measure = math.sqrt(max(dec2, 0.0) / (abs(cost0) or 1.0))
         if measure <= tol:
-            return u, it - 1, True, measure
+            return u, it - 1, True, measure, None
         # Projected search along the arc u(t) = P(u + t d); held variables
         # move along -g scaled by the Hessian's diagonal.
         if held.any():
             d[held] = -g[held] / np.maximum(np.diag(H)[held], 1e-300)
-        cost0 = tr.cost(u, U)
         t = 1.0
         for _ in range(50):
             trial = np.clip(u + t * d, lo, hi)
@@ -488,9 +487,9 @@ def projected_newton(tr, u, C, bounded, tol, max_iter):
                 break
             t *= 0.5
         else:
-            return u, it, False, measure
+            return u, it, False, measure, "the projected line search failed"
         u = trial
-    return u, max_iter, measure <= tol, measure
+    return u, max_iter, measure <= tol, measure, None
 
 
 def _regularised_cholesky(H):
@@ -565,7 +564,7 @@ def solve_cvm(dp: DiscreteProblem, transform: str = "auto", control: str = "P1",
     total_iter = 0
     for _ in range(7):
         run = projected_newton if newton else conditional_gradient
-        u, nit, ok, measure = run(tr, u, C, bounded, tol, max_iter)
+        u, nit, ok, measure, note = run(tr, u, C, bounded, tol, max_iter)
         total_iter += nit
         active = bool(np.any(np.abs(u) >= C * (1 - 1e-9)))
         if not (adapt and active):
@@ -577,8 +576,8 @@ def solve_cvm(dp: DiscreteProblem, transform: str = "auto", control: str = "P1",
     message = (f"cvm {tr.name}/{control} {minimizer}: "
                + ("optimality test passed" if ok else "optimality test NOT passed")
                + f" (measure {measure:.2e}, tol {tol:.0e}, {total_iter} iterations)")
-    if getattr(tr, "note", None):
-        message += f"; {tr.note}"
+    if note:
+        message += f"; {note}"
     if active:
         message += "; the control bound C is active at the optimum"
     return {
