@@ -33,7 +33,7 @@ __all__ = [
 ]
 
 # Essential conditions per support: which of (w0, theta0, wL, thetaL) are fixed.
-_FIXED = {
+FIXED_ENDS = {
     "P1": (True, True, True, True),
     "P2": (True, True, True, False),
     "P3": (True, True, False, False),
@@ -43,7 +43,7 @@ _FIXED = {
 
 def free_dofs(n_nodes: int, supports: str) -> np.ndarray:
     """Indices of the free degrees of freedom for the given supports."""
-    w0, t0, wl, tl = _FIXED[supports]
+    w0, t0, wl, tl = FIXED_ENDS[supports]
     last = 2 * (n_nodes - 1)
     fixed = [d for d, f in zip((0, 1, last, last + 1), (w0, t0, wl, tl)) if f]
     mask = np.ones(2 * n_nodes, dtype=bool)

@@ -37,9 +37,6 @@ from .discrete import CONTACT_POINTS, GAO_POINTS, DiscreteProblem
 
 __all__ = ["MixedForm"]
 
-# Fixed DOFs per support, as (w_0, theta_0, w_N, theta_N).
-_FIXED = {"P1": (1, 1, 1, 1), "P2": (1, 1, 1, 0), "P3": (1, 1, 0, 0), "P4": (1, 0, 1, 0)}
-
 
 def _rows(x, pts, elem, kind):
     """Sparse rows giving w (kind 0), w' (1) or w'' (2) at ``pts`` from the full z vector."""
@@ -76,7 +73,7 @@ class MixedForm:
         N = len(x) - 1
         self.N = N
         self.nz = 3 * N + 2
-        fw0, ft0, fwN, ftN = _FIXED[dp.scene.beam.supports]
+        fw0, ft0, fwN, ftN = fem.FIXED_ENDS[dp.scene.beam.supports]
         fixed = [i for i, f in zip((0, 1, 3 * N, 3 * N + 1), (fw0, ft0, fwN, ftN)) if f]
         mask = np.ones(self.nz, dtype=bool)
         mask[fixed] = False
