@@ -21,10 +21,18 @@ round-off: energies and gradients lose ~N eps instead of ~N^3 eps.
 Variables ``z`` are ordered per node ``[w_i, th_i, D_i]`` (the last node has
 no D); Newton solves the saddle-point (KKT) system of the linking constraint,
 which is banded in the ordering ``[w_i, th_i, D_i, lambda_i]``.
+
+Everything that depends only on the mesh and the supports (the quadrature
+matrices, the KKT ordering, and linear maps from quadrature weights to the
+entries of the banded KKT matrix) is a :class:`MixedStructure`, built once
+and shared by every scene on that mesh (a sweep, the repeated solves of a
+benchmark).  A Newton step then assembles its KKT matrix with a few sparse
+matrix-vector products instead of sparse matrix-matrix products.
 """
 
 from __future__ import annotations
 
+import collections
 import functools
 import math
 
@@ -35,7 +43,7 @@ import scipy.sparse as sp
 from . import fem
 from .discrete import CONTACT_POINTS, GAO_POINTS, DiscreteProblem
 
-__all__ = ["MixedForm"]
+__all__ = ["MixedForm", "MixedStructure", "Hessian"]
 
 
 def _rows(x, pts, elem, kind):
@@ -58,27 +66,43 @@ def _rows(x, pts, elem, kind):
     return rows, np.concatenate(cols), np.concatenate(vals), n
 
 
-class MixedForm:
-    """The energy of a :class:`DiscreteProblem` in the variables (w, theta, D).
+class MixedStructure:
+    """The parts of the mixed form that depend only on the mesh and the supports.
 
     Parameters
     ----------
-    dp : DiscreteProblem
-        Provides the mesh, the scaling and the coefficients.
+    xi : ndarray
+        Non-dimensional node positions.
+    supports : str
+        "P1" ... "P4".
+    slope : bool
+        Build the slope quadrature (Gao term or axial force).
+    contact : {None, "foundation", "obstacle"}
+        Build the contact quadrature (and for an obstacle its constraint rows).
+
+    Notes
+    -----
+    The KKT matrix ``[[H, C'], [C, 0]]`` is stored in LAPACK band form in the
+    interleaved order.  Its entries are linear in the weights of the
+    Hessian's quadrature terms: ``B' diag(d) B`` adds ``d_q b_qi b_qj`` to entry
+    (i, j).  :meth:`weight_map` precomputes, for a quadrature matrix B, the
+    sparse matrix that maps ``d`` to those band entries.
     """
 
-    def __init__(self, dp: DiscreteProblem):
-        self.dp = dp
-        x = dp.xi
+    def __init__(self, xi, supports: str, slope: bool, contact: str | None):
+        x = np.asarray(xi, float)
+        self.xi = x
         N = len(x) - 1
         self.N = N
         self.nz = 3 * N + 2
-        fw0, ft0, fwN, ftN = fem.FIXED_ENDS[dp.scene.beam.supports]
+        fw0, ft0, fwN, ftN = fem.FIXED_ENDS[supports]
         fixed = [i for i, f in zip((0, 1, 3 * N, 3 * N + 1), (fw0, ft0, fwN, ftN)) if f]
         mask = np.ones(self.nz, dtype=bool)
         mask[fixed] = False
         self.free = np.flatnonzero(mask)
         self.n = len(self.free)
+        self.has_slope = slope
+        self.contact = contact
 
         def matrix(pts, elem, kind):
             r, c, v, n = _rows(x, pts, elem, kind)
@@ -87,16 +111,15 @@ class MixedForm:
         xq, self.wq2, e = fem.gauss_points(x, 2)
         self.B2 = matrix(xq, e, 2)
         self.B2T = self.B2.T.tocsr()
-        self.has_slope = dp.needs_gao or dp.p != 0
-        if self.has_slope:
+        if slope:
             xq, self.wq5, e = fem.gauss_points(x, GAO_POINTS)
             self.B1 = matrix(xq, e, 1)
             self.B1T = self.B1.T.tocsr()
-        if dp.contact is not None:
+        if contact is not None:
             xq, self.wqc, e = fem.gauss_points(x, CONTACT_POINTS)
             self.Nq = matrix(xq, e, 0)
             self.NqT = self.Nq.T.tocsr()
-        if dp.contact == "obstacle":
+        if contact == "obstacle":
             # w >= g at the nodes (the variables w_i themselves) and at the Gauss
             # points, as the convex program; rows that touch no free DOF are dropped.
             nodes = sp.csr_matrix((np.ones(N + 1), (np.arange(N + 1), 3 * np.arange(N + 1))),
@@ -117,6 +140,182 @@ class MixedForm:
         cols = np.stack([3 * e + 3, 3 * e, 3 * e + 2], 1).ravel()
         vals = np.stack([np.ones(N), -np.ones(N), -h], 1).ravel()
         self.C = sp.csr_matrix((vals, (rows, cols)), shape=(N, self.nz))[:, self.free].tocsr()
+        self._layout()
+
+    # ---------------------------------------------------------------- band layout
+    def _layout(self):
+        """Interleaved KKT order (multiplier e right after D_e) and its bandwidths."""
+        keys = np.concatenate([self.free.astype(float), 3 * np.arange(self.N) + 2.5])
+        self.order = np.argsort(keys, kind="stable")
+        self.position = np.empty_like(self.order)
+        self.position[self.order] = np.arange(len(self.order))
+        self.nk = len(self.order)
+        # Every term couples only the variables of one element (and C its two
+        # nodes), so the union of their patterns bounds the band.
+        quads = [self.B2] + ([self.B1] if self.has_slope else []) \
+            + ([self.Nq] if self.contact else []) + ([self.A] if self.contact == "obstacle" else [])
+        bw = 0
+        for B in quads:
+            B = B.tocsr()
+            pos = self.position[B.indices]
+            starts = B.indptr[:-1][np.diff(B.indptr) > 0]
+            spread = np.maximum.reduceat(pos, starts) - np.minimum.reduceat(pos, starts)
+            bw = max(bw, int(np.max(spread, initial=0)))
+        Cc = self.C.tocoo()
+        d = self.position[self.n + Cc.row] - self.position[Cc.col]
+        # The matrix is symmetric: one bandwidth below and above.
+        self.lo = self.up = max(bw, int(np.max(np.abs(d), initial=0)))
+        self.band_shape = (2 * self.lo + self.up + 1, self.nk)
+
+    def _index(self, r, c):
+        """Flat index in the gbtrf band array of KKT entries (r, c) (KKT positions)."""
+        return (self.lo + self.up + r - c) * self.nk + c
+
+    def weight_map(self, B) -> sp.csc_matrix:
+        """Sparse M with ``band += M @ d`` adding ``B' diag(d) B`` to the KKT band.
+
+        Column q of M holds ``b_qi b_qj`` at the band entry of every pair (i, j)
+        of row q of B (short rows are padded with zero entries).  Rows of B must
+        not be empty.
+        """
+        B = B.tocsr()
+        size = self.band_shape[0] * self.nk
+        if B.nnz == 0:
+            return sp.csc_matrix((size, B.shape[0]))
+        counts = np.diff(B.indptr)
+        k = int(np.max(counts, initial=0))
+        nq = B.shape[0]
+        slot = np.arange(B.nnz) - np.repeat(B.indptr[:-1], counts)
+        row = np.repeat(np.arange(nq), counts)
+        # Padding repeats a column of the row, so every index stays inside the band.
+        first = self.position[B.indices[np.minimum(B.indptr[:-1], B.nnz - 1)]]
+        cols = np.repeat(first[:, None], k, axis=1)
+        vals = np.zeros((nq, k))
+        cols[row, slot] = self.position[B.indices]
+        vals[row, slot] = B.data
+        index = self._index(cols[:, :, None], cols[:, None, :]).reshape(nq, k * k)
+        data = (vals[:, :, None] * vals[:, None, :]).reshape(nq, k * k)
+        if not (np.all(index >= 0) and np.all(index < size)):  # scipy would not check
+            raise AssertionError("a quadrature row reaches outside the KKT band")
+        return sp.csc_matrix((data.ravel(), index.ravel(), np.arange(0, nq * k * k + 1, k * k)),
+                             shape=(size, nq))
+
+    def band_of(self, S) -> np.ndarray:
+        """Flat band array of a sparse matrix on the z variables (KKT order)."""
+        S = sp.coo_matrix(S)
+        ab = np.zeros(self.band_shape[0] * self.nk)
+        np.add.at(ab, self._index(self.position[S.row], self.position[S.col]), S.data)
+        return ab
+
+    @functools.cached_property
+    def link_band(self) -> np.ndarray:
+        """The constraint blocks C and C' of the KKT matrix, flat band array."""
+        Cc = self.C.tocoo()
+        ab = np.zeros(self.band_shape[0] * self.nk)
+        r, c = self.position[self.n + Cc.row], self.position[Cc.col]
+        np.add.at(ab, self._index(r, c), Cc.data)
+        np.add.at(ab, self._index(c, r), Cc.data)
+        return ab
+
+    @functools.cached_property
+    def bending(self) -> sp.csr_matrix:
+        """Bending Hessian B2' diag(w) B2 (constant)."""
+        return (self.B2T @ sp.diags(self.wq2) @ self.B2).tocsr()
+
+    @functools.cached_property
+    def axial(self) -> sp.csr_matrix:
+        """Geometric (axial) Hessian B1' diag(w) B1: the axial energy is -p/2 z' axial z."""
+        return (self.B1T @ sp.diags(self.wq5) @ self.B1).tocsr()
+
+    @functools.cached_property
+    def bending_band(self) -> np.ndarray:
+        return self.band_of(self.bending) + self.link_band
+
+    @functools.cached_property
+    def axial_band(self) -> np.ndarray:
+        return self.band_of(self.axial)
+
+    @functools.cached_property
+    def slope_map(self) -> sp.csr_matrix:
+        return self.weight_map(self.B1)
+
+    @functools.cached_property
+    def contact_map(self) -> sp.csr_matrix:
+        return self.weight_map(self.Nq)
+
+    @functools.cached_property
+    def obstacle_map(self) -> sp.csr_matrix:
+        return self.weight_map(self.A)
+
+
+# Structures of recent meshes, shared by the scenes solved on them (sweeps).
+_STRUCTURES: collections.OrderedDict = collections.OrderedDict()
+_STRUCTURE_CACHE = 4
+
+
+def structure_of(dp: DiscreteProblem) -> MixedStructure:
+    """The (cached) :class:`MixedStructure` of a problem's mesh, supports and terms."""
+    slope = bool(dp.needs_gao or dp.p != 0)
+    key = (dp.scene.beam.supports, dp.xi.tobytes(), slope, dp.contact)
+    s = _STRUCTURES.get(key)
+    if s is None:
+        s = _STRUCTURES[key] = MixedStructure(dp.xi, dp.scene.beam.supports, slope, dp.contact)
+        while len(_STRUCTURES) > _STRUCTURE_CACHE:
+            _STRUCTURES.popitem(last=False)
+    _STRUCTURES.move_to_end(key)
+    return s
+
+
+class Hessian:
+    """A (generalised) Hessian of the mixed energy, kept as its quadrature weights.
+
+    ``H = H0 + B1' diag(gao) B1 + Nq' diag(foundation) Nq + A' diag(obstacle) A``;
+    ``H @ x`` multiplies without assembling, and :meth:`band` gives the KKT
+    matrix in band form.
+    """
+
+    def __init__(self, mf: "MixedForm", gao=None, foundation=None, obstacle=None):
+        self.mf, self.gao, self.foundation, self.obstacle = mf, gao, foundation, obstacle
+
+    def __matmul__(self, x):
+        mf = self.mf
+        y = mf.H0 @ x
+        if self.gao is not None:
+            y += mf.B1T @ (self.gao * (mf.B1 @ x))
+        if self.foundation is not None:
+            y += mf.NqT @ (self.foundation * (mf.Nq @ x))
+        if self.obstacle is not None:
+            y += mf.AT @ (self.obstacle * (mf.A @ x))
+        return y
+
+    def band(self) -> np.ndarray:
+        """``[[H, C'], [C, 0]]`` in LAPACK gbtrf band storage (interleaved order)."""
+        s = self.mf.structure
+        ab = self.mf.base_band.copy()
+        if self.gao is not None:
+            ab += s.slope_map @ self.gao
+        if self.foundation is not None:
+            ab += s.contact_map @ self.foundation
+        if self.obstacle is not None:
+            ab += s.obstacle_map @ self.obstacle
+        return ab.reshape(s.band_shape)
+
+
+class MixedForm:
+    """The energy of a :class:`DiscreteProblem` in the variables (w, theta, D).
+
+    Parameters
+    ----------
+    dp : DiscreteProblem
+        Provides the mesh, the scaling and the coefficients.
+
+    The mesh-dependent matrices (``B2``, ``B1``, ``Nq``, ``A``, ``C``, ...) are
+    those of the shared :class:`MixedStructure`, reachable as attributes.
+    """
+
+    def __init__(self, dp: DiscreteProblem):
+        self.dp = dp
+        self.structure = structure_of(dp)
         # Load: the Hermite load vector acts on (w_i, theta_i).
         F = np.zeros(2 * dp.n_nodes)
         F[dp.free] = dp.f
@@ -124,9 +323,12 @@ class MixedForm:
         fz[0::3] = F[0::2]
         fz[1::3] = F[1::2]
         self.f = fz[self.free]
-        self._order = self._kkt_order()
-        self._inverse_order = np.empty_like(self._order)
-        self._inverse_order[self._order] = np.arange(len(self._order))
+
+    def __getattr__(self, name):
+        # Only reached for names not set on the instance: the mesh's matrices.
+        if name == "structure":
+            raise AttributeError(name)
+        return getattr(self.structure, name)
 
     # ---------------------------------------------------------------- conversion
     def to_hermite(self, z) -> np.ndarray:
@@ -182,56 +384,46 @@ class MixedForm:
         obst = (shift + rho * (dp.g - self.A @ z)) > 0 if shift is not None else None
         return found, obst
 
-    def hessian(self, z, shift=None, rho=0.0, active=None) -> sp.csr_matrix:
+    def hessian(self, z, shift=None, rho=0.0, active=None) -> Hessian:
         """Generalised Hessian at ``z`` (contact terms on ``active``, default: where they act)."""
         dp = self.dp
-        H = self.H0
+        gao = None
         if dp.needs_gao:
-            s = self.B1 @ z
-            H = H + self.B1T @ sp.diags(self.wq5 * dp.a * s**2) @ self.B1
+            gao = self.wq5 * dp.a * (self.B1 @ z) ** 2
         found, obst = self.active_sets(z, shift, rho) if active is None else active
-        if found is not None:
-            H = H + self.NqT @ sp.diags(dp.c * self.wqc * found) @ self.Nq
-        if obst is not None:
-            H = H + self.AT @ sp.diags(rho * obst.astype(float)) @ self.A
-        return H.tocsr()
+        return Hessian(self, gao,
+                       None if found is None else dp.c * self.wqc * found,
+                       None if obst is None else rho * obst.astype(float))
 
     # ---------------------------------------------------------------- KKT solves
-    def _kkt_order(self):
-        """Permutation interleaving each multiplier after its element's D (banded KKT)."""
-        key_z = self.free.astype(float)                     # z variables in node order
-        key_l = 3 * np.arange(self.N) + 2.5                 # multiplier e right after D_e
-        keys = np.concatenate([key_z, key_l])
-        return np.argsort(keys, kind="stable")
+    @functools.cached_property
+    def H0(self) -> sp.csr_matrix:
+        """The bending and axial part of the Hessian: constant, so built once."""
+        if self.has_slope and self.dp.p:
+            return (self.bending - self.dp.p * self.axial).tocsr()
+        return self.bending
 
-    def kkt_factor(self, H) -> "_KKTFactor":
+    @functools.cached_property
+    def base_band(self) -> np.ndarray:
+        """Band array of the KKT matrix of H0 (flat)."""
+        s = self.structure
+        if self.has_slope and self.dp.p:
+            return s.bending_band - self.dp.p * s.axial_band
+        return s.bending_band
+
+    def kkt_factor(self, H: Hessian) -> "_KKTFactor":
         """Banded LU of ``[[H, C'], [C, 0]]`` in the interleaved order (reusable)."""
-        K = sp.bmat([[H, self.C.T], [self.C, None]], format="coo")
-        if not K.has_canonical_format:
-            K.sum_duplicates()
-        p, inv = self._order, self._inverse_order
-        r, c = inv[K.row], inv[K.col]
-        lo, up = int(np.max(r - c, initial=0)), int(np.max(c - r, initial=0))
-        ab = np.zeros((2 * lo + up + 1, len(p)))
-        ab[lo + up + r - c, c] = K.data  # LAPACK gbtrf storage (lo extra rows for fill)
-        return _KKTFactor(ab, lo, up, p, self.n)
+        s = self.structure
+        return _KKTFactor(H.band(), s.lo, s.up, s.order, s.n)
 
-    def kkt_solve(self, H, rhs_z, rhs_c) -> tuple[np.ndarray, np.ndarray]:
+    def kkt_solve(self, H: Hessian, rhs_z, rhs_c) -> tuple[np.ndarray, np.ndarray]:
         """Solve ``[[H, C'], [C, 0]] [d; mu] = [rhs_z; rhs_c]`` as a banded system."""
         return self.kkt_factor(H).solve(rhs_z, rhs_c)
 
     @functools.cached_property
-    def H0(self) -> sp.csr_matrix:
-        """The bending and axial part of the Hessian: constant, so built once."""
-        H0 = self.B2T @ sp.diags(self.wq2) @ self.B2
-        if self.has_slope and self.dp.p:
-            H0 = H0 - self.dp.p * (self.B1T @ sp.diags(self.wq5) @ self.B1)
-        return H0.tocsr()
-
-    @functools.cached_property
     def quadratic_factor(self) -> "_KKTFactor":
         """KKT factor of H0 (the whole Hessian of a quadratic energy)."""
-        return self.kkt_factor(self.H0)
+        return self.kkt_factor(Hessian(self))
 
     @functools.cached_property
     def load_scale(self) -> float:

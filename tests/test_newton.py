@@ -98,3 +98,37 @@ def test_degenerate_scenes(method):
     assert r.success and r.P_bar == np.inf and np.all(r.w == 0) and r.energy == 0
     r = solve(Scene.from_dict(scene_dict("P4", q=None)), method)
     assert r.success and np.all(r.w == 0)
+
+
+@pytest.mark.parametrize("supports", ["P1", "P2", "P3", "P4"])
+@pytest.mark.parametrize("contact", ["foundation", "obstacle"])
+def test_band_assembly_equals_sparse_products(supports, contact):
+    """The KKT band from precomputed weight maps is the matrix of the sparse products."""
+    import scipy.sparse as sp
+
+    from gaocvx.mixed import Hessian, MixedForm
+
+    extra = dict(foundation=(0.001, 5e9)) if contact == "foundation" else dict(obstacle=0.001)
+    probe = DiscreteProblem(Scene.from_dict(scene_dict(supports, "gao", elements=9, **extra)))
+    scene = Scene.from_dict(scene_dict(supports, "gao", elements=9, axial=0.3 * probe.P_bar_h,
+                                       points=[(0.37, -1e8)], **extra))
+    mf = MixedForm(DiscreteProblem(scene))
+    rng = np.random.default_rng(1)
+    gao, found = rng.uniform(0, 3, mf.B1.shape[0]), rng.uniform(0, 3, mf.Nq.shape[0])
+    obst = rng.uniform(0, 3, mf.A.shape[0]) if contact == "obstacle" else None
+    H = Hessian(mf, gao, found, obst)
+    dense = (mf.B2.T @ sp.diags(mf.wq2) @ mf.B2 - mf.dp.p * mf.B1.T @ sp.diags(mf.wq5) @ mf.B1
+             + mf.B1.T @ sp.diags(gao) @ mf.B1 + mf.Nq.T @ sp.diags(found) @ mf.Nq)
+    if obst is not None:
+        dense = dense + mf.A.T @ sp.diags(obst) @ mf.A
+    K = sp.bmat([[dense, mf.C.T], [mf.C, None]]).toarray()
+    # Unpack the gbtrf band storage (interleaved order) back into a full matrix.
+    s = mf.structure
+    ab, n = H.band(), s.nk
+    full = np.zeros((n, n))
+    for r in range(n):
+        for c in range(max(0, r - s.lo), min(n, r + s.up + 1)):
+            full[r, c] = ab[s.lo + s.up + r - c, c]
+    assert np.allclose(full, K[np.ix_(s.order, s.order)], rtol=1e-13, atol=1e-12 * abs(K).max())
+    x = rng.standard_normal(mf.n)
+    assert np.allclose(H @ x, dense @ x, rtol=1e-13, atol=1e-12 * abs(K).max() * abs(x).max())
