@@ -313,7 +313,7 @@ class MixedForm:
     those of the shared :class:`MixedStructure`, reachable as attributes.
     """
 
-    def __init__(self, dp: DiscreteProblem):
+    def __init__(self, dp: DiscreteProblem, origin=None):
         self.dp = dp
         self.structure = structure_of(dp)
         # Load: the Hermite load vector acts on (w_i, theta_i).
@@ -323,6 +323,29 @@ class MixedForm:
         fz[0::3] = F[0::2]
         fz[1::3] = F[1::2]
         self.f = fz[self.free]
+        # The variables are z - origin.  Quantities that vanish at the answer
+        # (w - g in a contact zone) are then computed from small numbers, not as
+        # differences of large ones: with an obstacle penalty of 1e10 a round-off
+        # of 1e-16 |g| in w - g would be a force error of 1e-6 |g|.
+        self.origin = np.zeros(self.n) if origin is None else np.asarray(origin, float)
+        o = self.origin
+        self._curv0 = self.B2 @ o
+        self._link0 = self.C @ o
+        self._load0 = float(self.f @ o)
+        if self.has_slope:
+            self._slope0 = self.B1 @ o
+        if dp.contact is not None:
+            self._depth0 = dp.g - self.Nq @ o
+        if dp.contact == "obstacle":
+            self._gap0 = self.A @ o - dp.g
+
+    @classmethod
+    def on_obstacle(cls, dp: DiscreteProblem) -> "MixedForm":
+        """The form with its origin at the beam lying flat at the obstacle's level."""
+        s = structure_of(dp)
+        origin = np.zeros(s.nz)
+        origin[0::3] = dp.g
+        return cls(dp, origin[s.free])
 
     def __getattr__(self, name):
         # Only reached for names not set on the instance: the mesh's matrices.
@@ -334,24 +357,48 @@ class MixedForm:
     def to_hermite(self, z) -> np.ndarray:
         """Free Hermite DOFs (w_i, theta_i) of ``z``."""
         full = np.zeros(self.nz)
-        full[self.free] = z
+        full[self.free] = self.absolute(z)
         u = np.empty(2 * (self.N + 1))
         u[0::2] = full[0::3]
         u[1::2] = full[1::3]
         return u[self.dp.free]
 
+    def absolute(self, z) -> np.ndarray:
+        """The mixed variables themselves (``z + origin``)."""
+        return z + self.origin
+
+    def curvatures(self, z) -> np.ndarray:
+        """w'' at the 2-point Gauss points."""
+        return self.B2 @ z + self._curv0
+
+    def slopes(self, z) -> np.ndarray:
+        """w' at the 5-point Gauss points."""
+        return self.B1 @ z + self._slope0
+
+    def depth(self, z) -> np.ndarray:
+        """g - w at the contact points (positive where the beam is below the level)."""
+        return self._depth0 - self.Nq @ z
+
+    def gap(self, z) -> np.ndarray:
+        """w - g at the obstacle's constraint points (>= 0 when feasible)."""
+        return self.A @ z + self._gap0
+
+    def link(self, z) -> np.ndarray:
+        """Residual of the linking constraint ``w_{e+1} - w_e - h_e D_e``."""
+        return self.C @ z + self._link0
+
     # ---------------------------------------------------------------- energy
     def energy_parts(self, z) -> dict:
         """Non-dimensional energy parts (multiply by E0 for J)."""
         dp = self.dp
-        parts = {"bending": 0.5 * (self.wq2 @ (self.B2 @ z) ** 2), "gao": 0.0, "axial": 0.0,
-                 "load": -(self.f @ z), "foundation": 0.0}
+        parts = {"bending": 0.5 * (self.wq2 @ self.curvatures(z) ** 2), "gao": 0.0,
+                 "axial": 0.0, "load": -(self.f @ z + self._load0), "foundation": 0.0}
         if self.has_slope:
-            s = self.B1 @ z
+            s = self.slopes(z)
             parts["gao"] = dp.a / 12.0 * (self.wq5 @ s**4)
             parts["axial"] = -0.5 * dp.p * (self.wq5 @ s**2)
         if dp.contact == "foundation":
-            pen = np.maximum(dp.g - self.Nq @ z, 0.0)
+            pen = np.maximum(self.depth(z), 0.0)
             parts["foundation"] = 0.5 * dp.c * (self.wqc @ pen**2)
         return {k: float(v) for k, v in parts.items()}
 
@@ -363,16 +410,16 @@ class MixedForm:
         model of a semismooth Newton step with a predicted active set.
         """
         dp = self.dp
-        g = self.B2T @ (self.wq2 * (self.B2 @ z)) - self.f
+        g = self.B2T @ (self.wq2 * self.curvatures(z)) - self.f
         if self.has_slope:
-            s = self.B1 @ z
+            s = self.slopes(z)
             g += self.B1T @ (self.wq5 * (dp.a / 3.0 * s**3 - dp.p * s))
         if dp.contact == "foundation":
-            pen = dp.g - self.Nq @ z
+            pen = self.depth(z)
             pen = np.maximum(pen, 0.0) if active is None else pen * active[0]
             g -= dp.c * (self.NqT @ (self.wqc * pen))
         if shift is not None:
-            force = shift + rho * (dp.g - self.A @ z)
+            force = shift - rho * self.gap(z)
             force = np.maximum(force, 0.0) if active is None else force * active[1]
             g -= self.AT @ force
         return g
@@ -380,8 +427,8 @@ class MixedForm:
     def active_sets(self, z, shift=None, rho=0.0):
         """Where the contact terms act at ``z``: (foundation mask, obstacle mask)."""
         dp = self.dp
-        found = (dp.g - self.Nq @ z) > 0 if dp.contact == "foundation" else None
-        obst = (shift + rho * (dp.g - self.A @ z)) > 0 if shift is not None else None
+        found = self.depth(z) > 0 if dp.contact == "foundation" else None
+        obst = (shift - rho * self.gap(z)) > 0 if shift is not None else None
         return found, obst
 
     def hessian(self, z, shift=None, rho=0.0, active=None) -> Hessian:
@@ -389,7 +436,7 @@ class MixedForm:
         dp = self.dp
         gao = None
         if dp.needs_gao:
-            gao = self.wq5 * dp.a * (self.B1 @ z) ** 2
+            gao = self.wq5 * dp.a * self.slopes(z) ** 2
         found, obst = self.active_sets(z, shift, rho) if active is None else active
         return Hessian(self, gao,
                        None if found is None else dp.c * self.wqc * found,
@@ -414,7 +461,7 @@ class MixedForm:
     def kkt_factor(self, H: Hessian) -> "_KKTFactor":
         """Banded LU of ``[[H, C'], [C, 0]]`` in the interleaved order (reusable)."""
         s = self.structure
-        return _KKTFactor(H.band(), s.lo, s.up, s.order, s.n)
+        return _KKTFactor(H.band(), s.lo, s.up, s.order, s.n, H, self.C)
 
     def kkt_solve(self, H: Hessian, rhs_z, rhs_c) -> tuple[np.ndarray, np.ndarray]:
         """Solve ``[[H, C'], [C, 0]] [d; mu] = [rhs_z; rhs_c]`` as a banded system."""
@@ -441,6 +488,7 @@ class MixedForm:
         load = self.load_scale
         if load == 0:
             return 1.0
+        z = self.absolute(z)
         return max(math.sqrt(max(float(z @ (H @ z)), 0.0)), load)
 
     def decrement(self, z, H=None, g=None, factor=None, **al) -> tuple[float, np.ndarray]:
@@ -453,7 +501,7 @@ class MixedForm:
         g = self.gradient(z, **al) if g is None else g
         H = self.hessian(z, **al) if H is None else H
         factor = self.kkt_factor(H) if factor is None else factor
-        d, _ = factor.solve(-g, -(self.C @ z))
+        d, _ = factor.solve(-g, -self.link(z))
         dec2 = max(float(d @ (H @ d)), 0.0)
         scale = (self.load_scale or 1.0) if al else self.scale(z, H)
         return math.sqrt(dec2) / scale, d
@@ -462,15 +510,32 @@ class MixedForm:
 class _KKTFactor:
     """LU factor (LAPACK gbtrf) of a banded KKT matrix, for repeated solves."""
 
-    def __init__(self, ab, lo, up, order, n):
+    def __init__(self, ab, lo, up, order, n, H, C):
         self.lu, self.piv, info = sla.lapack.dgbtrf(ab, lo, up)
         if info > 0:
             raise np.linalg.LinAlgError("singular KKT matrix")
         self.lo, self.up, self.order, self.n = lo, up, order, n
+        self.H, self.C = H, C
 
-    def solve(self, rhs_z, rhs_c) -> tuple[np.ndarray, np.ndarray]:
+    def _solve(self, rhs_z, rhs_c):
         b = np.concatenate([rhs_z, rhs_c])[self.order]
         x, info = sla.lapack.dgbtrs(self.lu, self.lo, self.up, b, self.piv)
         sol = np.empty(len(self.order))
         sol[self.order] = x
         return sol[: self.n], sol[self.n:]
+
+    def solve(self, rhs_z, rhs_c, refine: int = 1) -> tuple[np.ndarray, np.ndarray]:
+        """Solve, with ``refine`` steps of iterative refinement.
+
+        A stiff obstacle penalty (rho up to 1e10) makes the KKT matrix
+        ill-conditioned, and the LU solution's error then lies in the soft
+        directions that the energy norm weighs most: one refinement step (a
+        residual from the unassembled H, one more banded solve) removes it.
+        """
+        d, mu = self._solve(rhs_z, rhs_c)
+        for _ in range(refine):
+            rz = rhs_z - (self.H @ d + self.C.T @ mu)
+            rc = rhs_c - self.C @ d
+            dd, dmu = self._solve(rz, rc)
+            d, mu = d + dd, mu + dmu
+        return d, mu

@@ -117,3 +117,21 @@ def test_gap_zero_obstacle():
     assert np.abs(down.w).max() < 1e-9
     up = solve(Scene.from_dict(scene_dict("P3", q=5e7, obstacle=0.0)), "convex")
     assert up.success and up.zones == [] and up.w.min() >= 0.0
+
+
+@pytest.mark.parametrize("elements", [1024, 2048])
+@pytest.mark.parametrize("kind", ["point contact", "flat contact"])
+def test_clarabel_certifies_fine_meshes(elements, kind):
+    """Fine meshes: a node in contact and the Gauss points 0.047 h beside it.
+
+    Their nearly parallel constraint rows left Clarabel's answers from 1024
+    elements on with complementarity ~1e-10 (not certified); the answers
+    must now be certified and agree with the method of multipliers.
+    """
+    supports, q = ("P1", -5e8) if kind == "point contact" else ("P4", -5e8)
+    scene = Scene.from_dict(scene_dict(supports, "gao", q=q, obstacle=0.007, elements=elements))
+    a, b = solve(scene, "convex"), solve(scene, "newton")
+    assert a.success, a.message
+    assert b.success, b.message
+    assert np.abs(a.w - b.w).max() <= 1e-7 * np.abs(b.w).max()
+    assert a.zones == b.zones
