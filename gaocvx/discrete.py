@@ -143,8 +143,6 @@ class DiscreteProblem:
         self.free = fem.free_dofs(self.n_nodes, beam.supports)
         fr = self.free
 
-        self.K = fem.stiffness_matrix(self.xi)[fr][:, fr].tocsr()
-
         # Loads per unit W: f_unit * (1/W) is the non-dimensional load.
         lf = beam.load_factor
         q = scene.load.q
@@ -165,11 +163,10 @@ class DiscreteProblem:
                                       for xk, Fk in scene.load.points], float).reshape(-1, 2)
 
         # Deflection scale: the size of the linear (EB, P = 0, contact-free) answer.
-        self._K_chol = BandedCholesky(self.K) if self.n else None
-        w_lin = 0.0
-        if self.n:
-            w_lin = np.max(np.abs(self._K_chol.solve(f_unit)[self._w_rows()]), initial=0.0)
         gap = scene.gap
+        w_lin = 0.0
+        if self.n and W_fixed is None:
+            w_lin = np.max(np.abs(self._K_chol.solve(f_unit)[self._w_rows()]), initial=0.0)
         if W_fixed is not None:
             self.W = float(W_fixed)  # a sweep keeps one scale for all its scenes
         elif w_lin > 0:
@@ -226,6 +223,15 @@ class DiscreteProblem:
     Nq = property(lambda self: self._contact_quadrature[0])
     NqT = property(lambda self: self._contact_quadrature[1])
     wq_c = property(lambda self: self._contact_quadrature[2])
+
+    @functools.cached_property
+    def K(self) -> sp.csr_matrix:
+        """Bending matrix on the free DOFs (non-dimensional)."""
+        return fem.stiffness_matrix(self.xi)[self.free][:, self.free].tocsr()
+
+    @functools.cached_property
+    def _K_chol(self):
+        return BandedCholesky(self.K) if self.n else None
 
     @functools.cached_property
     def G(self) -> sp.csr_matrix:

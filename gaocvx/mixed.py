@@ -43,7 +43,7 @@ import scipy.sparse as sp
 from . import fem
 from .discrete import CONTACT_POINTS, GAO_POINTS, DiscreteProblem
 
-__all__ = ["MixedForm", "MixedStructure", "Hessian"]
+__all__ = ["MixedForm", "MixedStructure", "Hessian", "structure_of", "clear_cache"]
 
 
 def _rows(x, pts, elem, kind):
@@ -141,6 +141,7 @@ class MixedStructure:
         vals = np.stack([np.ones(N), -np.ones(N), -h], 1).ravel()
         self.C = sp.csr_matrix((vals, (rows, cols)), shape=(N, self.nz))[:, self.free].tocsr()
         self._layout()
+        self.base_factors = {}  # KKT factors of H0, by p (see MixedForm.quadratic_factor)
 
     # ---------------------------------------------------------------- band layout
     def _layout(self):
@@ -251,6 +252,11 @@ class MixedStructure:
 # Structures of recent meshes, shared by the scenes solved on them (sweeps).
 _STRUCTURES: collections.OrderedDict = collections.OrderedDict()
 _STRUCTURE_CACHE = 4
+
+
+def clear_cache() -> None:
+    """Forget the cached mesh structures (benchmarks of first solves use it)."""
+    _STRUCTURES.clear()
 
 
 def structure_of(dp: DiscreteProblem) -> MixedStructure:
@@ -391,15 +397,16 @@ class MixedForm:
     def energy_parts(self, z) -> dict:
         """Non-dimensional energy parts (multiply by E0 for J)."""
         dp = self.dp
-        parts = {"bending": 0.5 * (self.wq2 @ self.curvatures(z) ** 2), "gao": 0.0,
+        k = self.curvatures(z)
+        parts = {"bending": 0.5 * (self.wq2 @ (k * k)), "gao": 0.0,
                  "axial": 0.0, "load": -(self.f @ z + self._load0), "foundation": 0.0}
         if self.has_slope:
-            s = self.slopes(z)
-            parts["gao"] = dp.a / 12.0 * (self.wq5 @ s**4)
-            parts["axial"] = -0.5 * dp.p * (self.wq5 @ s**2)
+            s2 = self.slopes(z) ** 2
+            parts["gao"] = dp.a / 12.0 * (self.wq5 @ (s2 * s2))
+            parts["axial"] = -0.5 * dp.p * (self.wq5 @ s2)
         if dp.contact == "foundation":
             pen = np.maximum(self.depth(z), 0.0)
-            parts["foundation"] = 0.5 * dp.c * (self.wqc @ pen**2)
+            parts["foundation"] = 0.5 * dp.c * (self.wqc @ (pen * pen))
         return {k: float(v) for k, v in parts.items()}
 
     def gradient(self, z, shift=None, rho=0.0, active=None) -> np.ndarray:
@@ -413,7 +420,7 @@ class MixedForm:
         g = self.B2T @ (self.wq2 * self.curvatures(z)) - self.f
         if self.has_slope:
             s = self.slopes(z)
-            g += self.B1T @ (self.wq5 * (dp.a / 3.0 * s**3 - dp.p * s))
+            g += self.B1T @ (self.wq5 * s * (dp.a / 3.0 * (s * s) - dp.p))
         if dp.contact == "foundation":
             pen = self.depth(z)
             pen = np.maximum(pen, 0.0) if active is None else pen * active[0]
@@ -436,7 +443,8 @@ class MixedForm:
         dp = self.dp
         gao = None
         if dp.needs_gao:
-            gao = self.wq5 * dp.a * self.slopes(z) ** 2
+            s = self.slopes(z)
+            gao = self.wq5 * dp.a * (s * s)
         found, obst = self.active_sets(z, shift, rho) if active is None else active
         return Hessian(self, gao,
                        None if found is None else dp.c * self.wqc * found,
@@ -461,7 +469,10 @@ class MixedForm:
     def kkt_factor(self, H: Hessian) -> "_KKTFactor":
         """Banded LU of ``[[H, C'], [C, 0]]`` in the interleaved order (reusable)."""
         s = self.structure
-        return _KKTFactor(H.band(), s.lo, s.up, s.order, s.n, H, self.C)
+        # Iterative refinement only where the matrix is ill-conditioned: with the
+        # obstacle's penalty.
+        refine = 1 if H.obstacle is not None else 0
+        return _KKTFactor(H.band(), s.lo, s.up, s.order, s.n, H, self.C, refine)
 
     def kkt_solve(self, H: Hessian, rhs_z, rhs_c) -> tuple[np.ndarray, np.ndarray]:
         """Solve ``[[H, C'], [C, 0]] [d; mu] = [rhs_z; rhs_c]`` as a banded system."""
@@ -469,8 +480,20 @@ class MixedForm:
 
     @functools.cached_property
     def quadratic_factor(self) -> "_KKTFactor":
-        """KKT factor of H0 (the whole Hessian of a quadratic energy)."""
-        return self.kkt_factor(Hessian(self))
+        """KKT factor of H0 (the whole Hessian of a quadratic energy).
+
+        H0 depends only on the mesh and p, so the factor is kept on the shared
+        structure: the scenes of a sweep over load, gap or stiffness factor it once.
+        """
+        s = self.structure
+        p = float(self.dp.p) if self.has_slope else 0.0
+        factor = s.base_factors.get(p)
+        if factor is None:
+            factor = _KKTFactor(self.base_band.reshape(s.band_shape), s.lo, s.up, s.order, s.n)
+            s.base_factors[p] = factor
+            while len(s.base_factors) > 4:
+                s.base_factors.pop(next(iter(s.base_factors)))
+        return factor
 
     @functools.cached_property
     def load_scale(self) -> float:
@@ -510,12 +533,12 @@ class MixedForm:
 class _KKTFactor:
     """LU factor (LAPACK gbtrf) of a banded KKT matrix, for repeated solves."""
 
-    def __init__(self, ab, lo, up, order, n, H, C):
+    def __init__(self, ab, lo, up, order, n, H=None, C=None, refine=0):
         self.lu, self.piv, info = sla.lapack.dgbtrf(ab, lo, up)
         if info > 0:
             raise np.linalg.LinAlgError("singular KKT matrix")
         self.lo, self.up, self.order, self.n = lo, up, order, n
-        self.H, self.C = H, C
+        self.H, self.C, self.refine = H, C, refine
 
     def _solve(self, rhs_z, rhs_c):
         b = np.concatenate([rhs_z, rhs_c])[self.order]
@@ -524,8 +547,8 @@ class _KKTFactor:
         sol[self.order] = x
         return sol[: self.n], sol[self.n:]
 
-    def solve(self, rhs_z, rhs_c, refine: int = 1) -> tuple[np.ndarray, np.ndarray]:
-        """Solve, with ``refine`` steps of iterative refinement.
+    def solve(self, rhs_z, rhs_c) -> tuple[np.ndarray, np.ndarray]:
+        """Solve, with ``self.refine`` steps of iterative refinement.
 
         A stiff obstacle penalty (rho up to 1e10) makes the KKT matrix
         ill-conditioned, and the LU solution's error then lies in the soft
@@ -533,7 +556,7 @@ class _KKTFactor:
         residual from the unassembled H, one more banded solve) removes it.
         """
         d, mu = self._solve(rhs_z, rhs_c)
-        for _ in range(refine):
+        for _ in range(self.refine):
             rz = rhs_z - (self.H @ d + self.C.T @ mu)
             rc = rhs_c - self.C @ d
             dd, dmu = self._solve(rz, rc)

@@ -76,8 +76,8 @@ def solve_newton(dp: DiscreteProblem, warm: dict | None = None, tol: float = TOL
     if dp.n == 0:
         return _finish(mf, z, None, 0, t0, "no free degrees of freedom: w = 0")
     if dp.contact != "obstacle":
-        z, nit, note = _newton(mf, z, tol, max_iter, {})
-        return _finish(mf, z, None, nit, t0, note)
+        z, nit, note, stationarity = _newton(mf, z, tol, max_iter, {})
+        return _finish(mf, z, None, nit, t0, note, stationarity)
 
     # Method of multipliers for A z >= g.
     lam = np.zeros(mf.A.shape[0])
@@ -90,7 +90,7 @@ def solve_newton(dp: DiscreteProblem, warm: dict | None = None, tol: float = TOL
     for outer in range(1, MAX_OUTER + 1):
         # Continuation: the penalty starts gentle (a soft foundation, which Newton
         # solves from any start) and stiffens tenfold per update up to rho_max.
-        z, nit, note = _newton(mf, z, tol, max_iter - total, {"shift": lam, "rho": rho})
+        z, nit, note, _ = _newton(mf, z, tol, max_iter - total, {"shift": lam, "rho": rho})
         total += nit
         lam = np.maximum(lam - rho * mf.gap(z), 0.0)
         # Every iterate is judged by the certificate itself.  A stiff penalty
@@ -127,31 +127,38 @@ def _penalty(mf: MixedForm) -> tuple[float, float]:
 
 
 def _newton(mf: MixedForm, z, tol, max_iter, al):
-    """Newton iterations on the (augmented) energy; returns (z, iterations, note)."""
+    """Newton iterations on the (augmented) energy.
+
+    Returns (z, iterations, note, stationarity): the last is the certificate's
+    stationarity at z when it was just computed (the Newton decrement of the
+    energy itself), else None.
+    """
     dp = mf.dp
     if dp.is_quadratic and not al:
         # One KKT solve: the energy is quadratic (its factor serves the certificate too).
         d, _ = mf.quadratic_factor.solve(-mf.gradient(z), -mf.link(z))
-        return z + d, 1, "one banded KKT solve (quadratic energy)"
+        return z + d, 1, "one banded KKT solve (quadratic energy)", None
     previous = math.inf
     for it in range(1, max(max_iter, 1) + 1):
         g = mf.gradient(z, **al)
         H = mf.hessian(z, **al)
         decrement, d = mf.decrement(z, H, g, **al)
         if decrement <= tol:
-            return z, it - 1, "Newton decrement below tolerance"
+            # The certificate's stationarity at z is this decrement (no multipliers).
+            return z, it - 1, "Newton decrement below tolerance", None if al else decrement
         if dp.contact is not None:
             predicted = _predict_active_set(mf, z, d, al)
             if float(g @ predicted) < 0.5 * float(g @ d):  # keep it only if it descends
                 d = predicted
         if decrement < ROUNDOFF and decrement > 0.5 * previous:
-            return z, it - 1, f"decrement stagnated at {decrement:.1e} (round-off)"
+            return z, it - 1, f"decrement stagnated at {decrement:.1e} (round-off)", \
+                None if al else decrement
         previous = decrement
         t = line_search(lambda s: float(mf.gradient(z + s * d, **al) @ d), float(g @ d))
         if t is None:
-            return z, it, "line search stalled (round-off level)"
+            return z, it, "line search stalled (round-off level)", None
         z = z + t * d
-    return z, max_iter, f"stopped after {max_iter} iterations"
+    return z, max_iter, f"stopped after {max_iter} iterations", None
 
 
 def _same(a, b):
@@ -259,8 +266,8 @@ def passes(residual: dict) -> bool:
     return bool(ok)
 
 
-def _finish(mf, z, lam, nit, t0, note):
-    residual = certify(mf, z, lam)
+def _finish(mf, z, lam, nit, t0, note, stationarity=None):
+    residual = certify(mf, z, lam) if stationarity is None else {"stationarity": stationarity}
     ok = passes(residual)
     return {"u": mf.to_hermite(z), "lam": lam, "status": "optimal" if ok else "inaccurate",
             "message": f"newton: {note}", "residual": residual, "nit": nit,
