@@ -41,7 +41,7 @@ MAX_OUTER = 40     # multiplier updates for the obstacle
 RHO_CAP = 1e10
 # The method of multipliers stops when every measure of the certificate is below
 # this fraction of its tolerance.
-MARGIN = {"stationarity": 1e-3, "feasibility": 1e-3, "dual": 1e-3, "complementarity": 1e-2}
+MARGIN = {"stationarity": 1e-3, "feasibility": 1e-2, "dual": 1e-2, "complementarity": 1e-2}
 TOLERANCES = {"stationarity": STATIONARITY_TOL, "feasibility": FEASIBILITY_TOL,
               "dual": FEASIBILITY_TOL, "complementarity": COMPLEMENTARITY_TOL}
 
@@ -100,13 +100,19 @@ def solve_newton(dp: DiscreteProblem, warm: dict | None = None, tol: float = TOL
         merit = max(residual[k] / (MARGIN[k] * tol_k) for k, tol_k in TOLERANCES.items())
         if best is None or merit < best[0]:
             best = (merit, z, lam, f"{note}; {outer} multiplier updates")
-        if merit <= 1.0 or total >= max_iter:
+            stalled = 0
+        else:
+            stalled += 1
+        # Done when within the margins, or when a best within ten times them has
+        # not been improved on for three updates (round-off: a stiffer penalty
+        # only hurts).
+        if merit <= 1.0 or total >= max_iter or (stalled >= 3 and best[0] <= 10.0):
             break
         violation = residual["feasibility"]
         if rho < rho_max or violation > 0.25 * previous:
             rho = min(10.0 * rho, rho_max)
         previous = violation
-    _, z, lam, note = best
+    z, lam, note = best[1:4]
     return _finish(mf, z, lam, total, t0, note)
 
 
