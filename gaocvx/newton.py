@@ -41,7 +41,7 @@ MAX_OUTER = 40     # multiplier updates for the obstacle
 RHO_CAP = 1e10
 # The method of multipliers stops when every measure of the certificate is below
 # this fraction of its tolerance.
-MARGIN = {"stationarity": 1e-3, "feasibility": 1e-2, "dual": 1e-2, "complementarity": 1e-2}
+MARGIN = {"stationarity": 1e-3, "feasibility": 1e-3, "dual": 1e-3, "complementarity": 1e-2}
 TOLERANCES = {"stationarity": STATIONARITY_TOL, "feasibility": FEASIBILITY_TOL,
               "dual": FEASIBILITY_TOL, "complementarity": COMPLEMENTARITY_TOL}
 
