@@ -176,8 +176,7 @@ class MixedStructure:
         """Sparse M with ``band += M @ d`` adding ``B' diag(d) B`` to the KKT band.
 
         Column q of M holds ``b_qi b_qj`` at the band entry of every pair (i, j)
-        of row q of B (short rows are padded with zero entries).  Rows of B must
-        not be empty.
+        of row q of B (short rows are padded with zero entries).
         """
         B = B.tocsr()
         size = self.band_shape[0] * self.nk
@@ -230,22 +229,27 @@ class MixedStructure:
 
     @functools.cached_property
     def bending_band(self) -> np.ndarray:
+        """KKT band of the bending Hessian with the constraint blocks (flat)."""
         return self.band_of(self.bending) + self.link_band
 
     @functools.cached_property
     def axial_band(self) -> np.ndarray:
+        """KKT band of the axial Hessian (flat; enters with the factor -p)."""
         return self.band_of(self.axial)
 
     @functools.cached_property
-    def slope_map(self) -> sp.csr_matrix:
+    def slope_map(self) -> sp.csc_matrix:
+        """Weights at the slope points -> band entries (Gao term)."""
         return self.weight_map(self.B1)
 
     @functools.cached_property
-    def contact_map(self) -> sp.csr_matrix:
+    def contact_map(self) -> sp.csc_matrix:
+        """Weights at the contact points -> band entries (foundation)."""
         return self.weight_map(self.Nq)
 
     @functools.cached_property
-    def obstacle_map(self) -> sp.csr_matrix:
+    def obstacle_map(self) -> sp.csc_matrix:
+        """Weights at the obstacle's constraint points -> band entries (penalty)."""
         return self.weight_map(self.A)
 
 
@@ -314,6 +318,8 @@ class MixedForm:
     ----------
     dp : DiscreteProblem
         Provides the mesh, the scaling and the coefficients.
+    origin : ndarray, optional
+        The variables are ``z - origin`` (default: zero); see :meth:`on_obstacle`.
 
     The mesh-dependent matrices (``B2``, ``B1``, ``Nq``, ``A``, ``C``, ...) are
     those of the shared :class:`MixedStructure`, reachable as attributes.
@@ -397,8 +403,8 @@ class MixedForm:
     def energy_parts(self, z) -> dict:
         """Non-dimensional energy parts (multiply by E0 for J)."""
         dp = self.dp
-        k = self.curvatures(z)
-        parts = {"bending": 0.5 * (self.wq2 @ (k * k)), "gao": 0.0,
+        kappa = self.curvatures(z)
+        parts = {"bending": 0.5 * (self.wq2 @ (kappa * kappa)), "gao": 0.0,
                  "axial": 0.0, "load": -(self.f @ z + self._load0), "foundation": 0.0}
         if self.has_slope:
             s2 = self.slopes(z) ** 2
