@@ -252,6 +252,14 @@ class MixedStructure:
         """Weights at the obstacle's constraint points -> band entries (penalty)."""
         return self.weight_map(self.A)
 
+    def stacked_map(self, terms: tuple) -> sp.csc_matrix:
+        """The maps of ``terms`` (names among slope, contact, obstacle) side by side."""
+        key = "_stacked_" + "_".join(terms)
+        if key not in self.__dict__:
+            maps = [getattr(self, name + "_map") for name in terms]
+            self.__dict__[key] = maps[0] if len(maps) == 1 else sp.hstack(maps, format="csc")
+        return self.__dict__[key]
+
 
 # Structures of recent meshes, shared by the scenes solved on them (sweeps).
 _STRUCTURES: collections.OrderedDict = collections.OrderedDict()
@@ -301,13 +309,15 @@ class Hessian:
     def band(self) -> np.ndarray:
         """``[[H, C'], [C, 0]]`` in LAPACK gbtrf band storage (interleaved order)."""
         s = self.mf.structure
-        ab = self.mf.base_band.copy()
-        if self.gao is not None:
-            ab += s.slope_map @ self.gao
-        if self.foundation is not None:
-            ab += s.contact_map @ self.foundation
-        if self.obstacle is not None:
-            ab += s.obstacle_map @ self.obstacle
+        terms = tuple(name for name, w in (("slope", self.gao), ("contact", self.foundation),
+                                           ("obstacle", self.obstacle)) if w is not None)
+        if not terms:
+            ab = self.mf.base_band.copy()
+        else:
+            # One mat-vec with the stacked maps of the terms present.
+            weights = [w for w in (self.gao, self.foundation, self.obstacle) if w is not None]
+            ab = s.stacked_map(terms) @ np.concatenate(weights)
+            ab += self.mf.base_band
         return ab.reshape(s.band_shape)
 
 
