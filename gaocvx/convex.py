@@ -135,7 +135,7 @@ class ConvexProgram:
                          * cp.quad_form(u, cp.psd_wrap(sp.diags(mf.wq5))))
         self.obstacle = None
         if dp.contact is not None:
-            self.g = param(dp.g, name="level")
+            self.g = param(_level(mf), name="level")
         if dp.contact == "foundation":
             # c/2 sum w_q pos(g - w_q)^2 = c/2 sum w_q v_q^2 with v >= 0, v >= g - w_q.
             self.c = param(dp.c, nonneg=True, name="stiffness")
@@ -160,9 +160,21 @@ class ConvexProgram:
         if dp.needs_gao:
             self.a.value = dp.a
         if dp.contact is not None:
-            self.g.value = dp.g
+            self.g.value = _level(mf)
         if dp.contact == "foundation":
             self.c.value = dp.c
+
+
+def _level(mf: MixedForm) -> float:
+    """The contact level for the program: g, or -2x a bound on the answer's deflection.
+
+    A foundation or obstacle millions of deflection scales below the beam puts
+    numbers of that size into the program's constraints, and Clarabel fails.
+    Below twice :meth:`MixedForm.deflection_bound` the contact term vanishes
+    near the answer, so raising the level there does not change the minimiser.
+    """
+    bound = mf.deflection_bound()
+    return mf.dp.g if bound == 0 else max(mf.dp.g, -2.0 * bound)
 
 
 def _slope_scale(mf: MixedForm) -> float:

@@ -522,6 +522,22 @@ class MixedForm:
         d, _ = self.quadratic_factor.solve(self.f, np.zeros(self.N))
         return math.sqrt(max(float(self.f @ d), 0.0))
 
+    def deflection_bound(self) -> float:
+        """An upper bound on max |w| of the minimiser (non-dimensional), from the load alone.
+
+        The minimiser w* has energy <= 0 (w = 0 is admissible with energy 0,
+        as g <= 0).  Dropping the nonnegative Gao and contact terms,
+        ``1/2 |w*|_Q^2 - f'w* <= 0``, so ``|w*|_Q <= 2 |f|_{Q^-1}`` (Q: bending
+        and axial; ``|f|_{Q^-1}`` is :attr:`load_scale`).  With
+        ``Q >= (1 - P/P_bar_h) K`` and ``|w(x)| <= |w|_K sqrt(G(x, x))``, where G
+        is the continuum Green's function (the Hermite space is a subspace) and
+        ``G(x, x) <= 1/3`` for every support (the cantilever's tip, in units of
+        L^3/EI), ``|w*(x)| <= 2 |f|_{Q^-1} / sqrt(3 (1 - P/P_bar_h))``.
+        """
+        dp = self.dp
+        margin = 1.0 - dp.P / dp.P_bar_h if dp.P > 0 else 1.0
+        return 2.0 * self.load_scale / math.sqrt(3.0 * margin)
+
     def scale(self, z, H) -> float:
         """The size of the problem: the solution's energy norm or the load's; 1 without load."""
         load = self.load_scale
