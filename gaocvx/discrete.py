@@ -171,9 +171,9 @@ class DiscreteProblem:
             self.W = float(W_fixed)  # a sweep keeps one scale for all its scenes
         elif w_lin > 0:
             self.W = float(w_lin)
-        elif gap:
-            self.W = float(gap)
         else:
+            # No load: the answer is w = 0 and any scale serves; a gap of 1e-178 m
+            # as the scale would underflow the energy scale.
             self.W = 1e-3 * L
         self.E0 = EI * self.W**2 / L**3
         self.f = f_unit / self.W
