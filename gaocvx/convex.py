@@ -90,8 +90,8 @@ class ConvexProgram:
         Make the load, level, stiffness, Gao coefficient and tension CVXPY
         Parameters (DPP), so that :meth:`set` and a new solve reuse the
         compilation.  Compiling a parametric program costs far more than a
-        constant one (3.2 s against 0.06 s at 1024 elements, measured), so only
-        sweeps ask for it.
+        constant one (2.4 s against 0.24 s at 1024 elements, measured), so only
+        long sweeps ask for it.
     """
 
     def __init__(self, mf: MixedForm, parametric: bool = False):
@@ -122,7 +122,8 @@ class ConvexProgram:
         if dp.needs_gao:
             # a/12 sum w_q s_q^4 = a sigma^4/12 sum w_q u_q^2 with u_q >= (s_q/sigma)^2,
             # one rotated cone ||(2 s_q/sigma, u_q - 1)|| <= u_q + 1 per point.  The
-            # slope scale sigma (of the linear answer) brings u to about 1: unscaled,
+            # slope scale sigma (of a Ritz estimate of the answer; in a parametric
+            # program, of the first scene) brings u to about 1: unscaled,
             # slopes of 7 took Clarabel 71 iterations to 'optimal_inaccurate' where
             # scaled ones take 13 to 'optimal' (measured).  The power cone of
             # power(s, 4) is much less accurate in Clarabel.
