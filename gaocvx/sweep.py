@@ -103,11 +103,10 @@ def _check_key(scene: Scene, key: str) -> None:
         raise SceneError(key, f"the scene has no [{section}] table to vary", key)
 
 
-# The parametric (DPP) convex program compiles ~10x slower than a constant one
-# (2.4 s against 0.24 s at 1024 elements) and saves ~50 ms per later solve there;
-# Clarabel cannot warm-start, so it pays off only on long sweeps (measured
-# break-even about 45 values at 1024 elements).
-CONVEX_REUSE_MIN = 50
+# The parametric (DPP) convex program compiles as fast as a constant one (the
+# load enters as a scalar factor) and saves about 30% of each later solve; only
+# Clarabel's iterations remain, as it cannot warm-start.
+CONVEX_REUSE_MIN = 2
 
 
 def _solve_values(scene: Scene, key: str, values, method: str | None):
