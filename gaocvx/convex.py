@@ -66,7 +66,7 @@ log = logging.getLogger(__name__)
 # setting, the next one is tried.
 CLARABEL_LADDER = {
     "smooth": [dict(tol_gap_abs=1e-10, tol_gap_rel=1e-10, tol_feas=1e-10, max_iter=400),
-               dict(tol_gap_abs=1e-13, tol_gap_rel=1e-13, tol_feas=1e-10, max_iter=400)],
+               dict(tol_gap_abs=1e-13, tol_gap_rel=1e-13, tol_feas=1e-10, max_iter=400), {}],
     "obstacle": [dict(tol_gap_abs=1e-13, tol_gap_rel=1e-13, tol_feas=1e-10, max_iter=400,
                       static_regularization_constant=1e-12),
                  dict(tol_gap_abs=1e-13, tol_gap_rel=1e-13, tol_feas=1e-10, max_iter=400),
@@ -78,6 +78,20 @@ CLARABEL_LADDER = {
 OSQP_LADDER = [dict(eps_abs=1e-6, eps_rel=1e-6, max_iter=200_000, polishing=True),
                dict(eps_abs=1e-8, eps_rel=1e-8, max_iter=400_000, polishing=True)]
 _CACHE_SIZE = 4
+
+
+def _explicit(ladder: list) -> list:
+    """Every rung with every setting the ladder touches, Clarabel's defaults filled in.
+
+    A setting given once stays in force for later solves of the same CVXPY
+    problem unless it is given again (measured: a static regularisation of
+    1e-12 leaked into the next rung, which then failed as the first had).
+    """
+    import clarabel
+
+    defaults = clarabel.DefaultSettings()
+    keys = {k for rung in ladder for k in rung}
+    return [{**{k: getattr(defaults, k) for k in keys}, **rung} for rung in ladder]
 
 
 class ConvexProgram:
@@ -181,15 +195,16 @@ class ConvexProgram:
 
 
 def _level(mf: MixedForm) -> float:
-    """The contact level for the program: g, or -2x a bound on the answer's deflection.
+    """The contact level for the program: g, or a level the answer provably cannot reach.
 
     A foundation or obstacle millions of deflection scales below the beam puts
     numbers of that size into the program's constraints, and Clarabel fails.
-    Below twice :meth:`MixedForm.deflection_bound` the contact term vanishes
-    near the answer, so raising the level there does not change the minimiser.
+    Below twice :meth:`MixedForm.deflection_bound` (and below -1, one
+    deflection scale) the contact term vanishes near the answer, so raising
+    the level there does not change the minimiser.
     """
-    bound = mf.deflection_bound()
-    return mf.dp.g if bound == 0 else max(mf.dp.g, -2.0 * bound)
+    # At least one deflection scale below: with no load the bound is 0 (w = 0).
+    return max(mf.dp.g, -max(2.0 * mf.deflection_bound(), 1.0))
 
 
 def _slope_scale(mf: MixedForm) -> float:
@@ -288,12 +303,26 @@ def solve_convex(dp: DiscreteProblem, solver: str = "clarabel", verbose: bool = 
     if solver == "osqp" and dp.needs_gao:
         raise SceneError("solve.solver", "OSQP solves quadratic programs only; the gao "
                          "model's quartic term needs clarabel", solver)
+    if mf.load_scale == 0:
+        # Every energy term is >= 0 below P_bar_h and vanishes at w = 0, which is
+        # admissible (g <= 0): the exact minimiser.  Interior-point iterations on
+        # an optimum of value 0 can stall (measured: Clarabel's InsufficientProgress
+        # under compression), so the solver is not called.
+        z = np.zeros(mf.n)
+        lam = None if dp.contact != "obstacle" else np.zeros(mf.A.shape[0])
+        residual = certify(mf, z, lam)
+        status = "optimal" if passes(residual) else "inaccurate"
+        return {"u": mf.to_hermite(z), "lam": lam, "status": status,
+                "message": "no load: w = 0 is the exact minimiser (every energy term is >= 0 "
+                           "and vanishes there); the solver was not called",
+                "residual": residual, "nit": 0, "solver": solver,
+                "solve_time": time.perf_counter() - t0, "mixed": mf, "z": z, "reused": False}
     program, reused = _program(mf, solver, reuse)
     if solver == "osqp":
         attempts = [dict(solver=cp.OSQP, **s) for s in OSQP_LADDER]
     else:
         kind = "obstacle" if dp.contact == "obstacle" else "smooth"
-        attempts = [dict(solver=cp.CLARABEL, **s) for s in CLARABEL_LADDER[kind]]
+        attempts = [dict(solver=cp.CLARABEL, **s) for s in _explicit(CLARABEL_LADDER[kind])]
     best = None
     for kwargs in attempts:
         with warnings.catch_warnings():

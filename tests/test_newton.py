@@ -193,3 +193,28 @@ def test_far_foundation_convex():
     assert a.success and b.success, b.message
     assert np.abs(a.w - b.w).max() <= 1e-7 * np.abs(a.w).max()
     assert b.zones == []
+
+
+@settings(max_examples=40, deadline=None)
+@given(supports=st.sampled_from(["P1", "P2", "P3", "P4"]),
+       model=st.sampled_from(["gao", "euler-bernoulli"]),
+       q=_loads(2e9), force=_loads(5e8), where=st.floats(0.05, 1.0),
+       fraction=st.floats(-1.0, 0.9), contact=st.sampled_from([None, "foundation", "obstacle"]),
+       gap=st.floats(0.0, 0.05), stiffness=st.floats(1e6, 1e13))
+def test_newton_and_convex_agree_on_random_scenes(supports, model, q, force, where, fraction,
+                                                  contact, gap, stiffness):
+    """Newton certifies every scene; where the convex program does too, they agree."""
+    extra = {}
+    if contact == "foundation":
+        extra["foundation"] = (gap, stiffness)
+    elif contact == "obstacle":
+        extra["obstacle"] = gap
+    kw = dict(q=q, points=[(where, force)], elements=10, **extra)
+    probe = DiscreteProblem(Scene.from_dict(scene_dict(supports, model, **kw)))
+    scene = Scene.from_dict(scene_dict(supports, model, axial=fraction * probe.P_bar_h, **kw))
+    a = solve(scene, "newton")
+    assert a.success, a.message
+    b = solve(scene, "convex")
+    if b.success:
+        scale = max(np.abs(a.w).max(), DiscreteProblem(scene).W)
+        assert np.abs(a.w - b.w).max() <= 2e-6 * scale, (a.message, b.message)
