@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import collections
 import logging
+import threading
 import time
 import warnings
 
@@ -245,7 +246,21 @@ def _compressed_form(mf: MixedForm) -> sp.csr_matrix:
                      f"convex form (P_bar_h = {dp.P_bar_h:.4g} N)", dp.P)
 
 
-_programs: collections.OrderedDict = collections.OrderedDict()
+# Compiled parametric programs by structure.  One cache per thread: a program
+# holds the parameter values of the scene being solved, so two threads must not
+# share it.
+_local = threading.local()
+
+
+def _programs() -> collections.OrderedDict:
+    if not hasattr(_local, "programs"):
+        _local.programs = collections.OrderedDict()
+    return _local.programs
+
+
+def clear_programs() -> None:
+    """Forget this thread's compiled parametric programs."""
+    _programs().clear()
 
 
 def _structure(mf: MixedForm, solver: str):
@@ -257,14 +272,15 @@ def _structure(mf: MixedForm, solver: str):
 def _program(mf: MixedForm, solver: str, reuse: bool) -> tuple[ConvexProgram, bool]:
     if not reuse:
         return ConvexProgram(mf), False
+    cache = _programs()
     key = _structure(mf, solver)
-    if key in _programs and _programs[key].set(mf):
-        _programs.move_to_end(key)
-        return _programs[key], True
+    if key in cache and cache[key].set(mf):
+        cache.move_to_end(key)
+        return cache[key], True
     program = ConvexProgram(mf, parametric=True)
-    _programs[key] = program
-    while len(_programs) > _CACHE_SIZE:
-        _programs.popitem(last=False)
+    cache[key] = program
+    while len(cache) > _CACHE_SIZE:
+        cache.popitem(last=False)
     return program, False
 
 

@@ -35,6 +35,7 @@ from __future__ import annotations
 import collections
 import functools
 import math
+import threading
 
 import numpy as np
 import scipy.linalg as sla
@@ -261,26 +262,35 @@ class MixedStructure:
         return self.__dict__[key]
 
 
-# Structures of recent meshes, shared by the scenes solved on them (sweeps).
-_STRUCTURES: collections.OrderedDict = collections.OrderedDict()
+# Structures of recent meshes, shared by the scenes solved on them (sweeps).  One
+# cache per thread: a Dask worker may run several blocks of a sweep in threads,
+# and a structure fills its lazy parts (maps, factors) on first use.
+_local = threading.local()
 _STRUCTURE_CACHE = 4
 
 
+def _structures() -> collections.OrderedDict:
+    if not hasattr(_local, "structures"):
+        _local.structures = collections.OrderedDict()
+    return _local.structures
+
+
 def clear_cache() -> None:
-    """Forget the cached mesh structures (benchmarks of first solves use it)."""
-    _STRUCTURES.clear()
+    """Forget this thread's cached mesh structures (benchmarks of first solves use it)."""
+    _structures().clear()
 
 
 def structure_of(dp: DiscreteProblem) -> MixedStructure:
     """The (cached) :class:`MixedStructure` of a problem's mesh, supports and terms."""
+    cache = _structures()
     slope = bool(dp.needs_gao or dp.p != 0)
     key = (dp.scene.beam.supports, dp.xi.tobytes(), slope, dp.contact)
-    s = _STRUCTURES.get(key)
+    s = cache.get(key)
     if s is None:
-        s = _STRUCTURES[key] = MixedStructure(dp.xi, dp.scene.beam.supports, slope, dp.contact)
-        while len(_STRUCTURES) > _STRUCTURE_CACHE:
-            _STRUCTURES.popitem(last=False)
-    _STRUCTURES.move_to_end(key)
+        s = cache[key] = MixedStructure(dp.xi, dp.scene.beam.supports, slope, dp.contact)
+        while len(cache) > _STRUCTURE_CACHE:
+            cache.popitem(last=False)
+    cache.move_to_end(key)
     return s
 
 

@@ -31,7 +31,7 @@ BASE = {
 @pytest.mark.parametrize("kind", sorted(BASE))
 def test_reused_program_gives_the_fresh_answer(kind):
     d, key, values = BASE[kind]
-    convex._programs.clear()
+    convex.clear_programs()
     base = Scene.from_dict(d)
     W = DiscreteProblem(base).W
     for i, v in enumerate(values):
@@ -50,7 +50,7 @@ def test_reused_program_gives_the_fresh_answer(kind):
 
 def test_load_of_another_shape_gets_its_own_program():
     """Changing q beside a point force changes the load's shape: not a Parameter change."""
-    convex._programs.clear()
+    convex.clear_programs()
     base = Scene.from_dict(scene_dict("P1", "gao", q=-5e8, points=[(0.3, -1e8)],
                                       foundation=(0.007, 5e9), elements=24))
     W = DiscreteProblem(base).W
@@ -69,3 +69,22 @@ def test_structure_cache_does_not_change_answers():
     first = solve(scene, "newton")
     again = solve(scene, "newton")
     assert np.array_equal(first.w, again.w)
+
+
+def test_threads_do_not_share_programs():
+    """Two sweeps of one structure in two threads (as in a threaded Dask worker)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from gaocvx.sweep import sweep
+
+    d, key, values = BASE["stiffness"]
+    scenes = [Scene.from_dict(d), scene_at(Scene.from_dict(d), "load.scale", 0.5)]
+
+    def run(scene):
+        return [r.w for _, r in sweep(scene, key, values * 4, method="convex")]
+
+    with ThreadPoolExecutor(2) as pool:
+        threaded = list(pool.map(run, scenes))
+    for scene, got in zip(scenes, threaded):
+        for w, (_, r) in zip(got, sweep(scene, key, values * 4, method="newton")):
+            assert np.abs(w - r.w).max() <= 1e-7 * np.abs(r.w).max()
