@@ -33,9 +33,7 @@ is called optimal.
 
 from __future__ import annotations
 
-import collections
 import logging
-import threading
 import time
 import warnings
 
@@ -45,7 +43,8 @@ import scipy.sparse as sp
 from .discrete import DiscreteProblem
 from .errors import SceneError, SolverError
 from .linalg import BandedCholesky, NotPositiveDefinite
-from .mixed import MixedForm
+from .cache import LRU
+from .mixed import MixedForm, structure_key
 from .newton import certify, passes
 
 __all__ = ["solve_convex", "ConvexProgram"]
@@ -78,7 +77,6 @@ CLARABEL_LADDER = {
 # exact solve on the guessed active set, gives the accuracy from 1e-6 on.
 OSQP_LADDER = [dict(eps_abs=1e-6, eps_rel=1e-6, max_iter=200_000, polishing=True),
                dict(eps_abs=1e-8, eps_rel=1e-8, max_iter=400_000, polishing=True)]
-_CACHE_SIZE = 4
 
 
 def _explicit(ladder: list) -> list:
@@ -246,42 +244,26 @@ def _compressed_form(mf: MixedForm) -> sp.csr_matrix:
                      f"convex form (P_bar_h = {dp.P_bar_h:.4g} N)", dp.P)
 
 
-# Compiled parametric programs by structure.  One cache per thread: a program
-# holds the parameter values of the scene being solved, so two threads must not
-# share it.
-_local = threading.local()
-
-
-def _programs() -> collections.OrderedDict:
-    if not hasattr(_local, "programs"):
-        _local.programs = collections.OrderedDict()
-    return _local.programs
+# Compiled parametric programs by structure, one cache per thread: a program
+# holds the parameter values of the scene being solved.
+_PROGRAMS = LRU(4, per_thread=True)
 
 
 def clear_programs() -> None:
     """Forget this thread's compiled parametric programs."""
-    _programs().clear()
-
-
-def _structure(mf: MixedForm, solver: str):
-    dp = mf.dp
-    return (dp.scene.beam.supports, dp.xi.tobytes(), dp.contact, dp.needs_gao, mf.has_slope,
-            dp.p if dp.p > 0 else None, solver)
+    _PROGRAMS.clear()
 
 
 def _program(mf: MixedForm, solver: str, reuse: bool) -> tuple[ConvexProgram, bool]:
     if not reuse:
         return ConvexProgram(mf), False
-    cache = _programs()
-    key = _structure(mf, solver)
-    if key in cache and cache[key].set(mf):
-        cache.move_to_end(key)
-        return cache[key], True
-    program = ConvexProgram(mf, parametric=True)
-    cache[key] = program
-    while len(cache) > _CACHE_SIZE:
-        cache.popitem(last=False)
-    return program, False
+    dp = mf.dp
+    # The compressed form depends on p, fixed when the program is built.
+    key = (structure_key(dp), dp.needs_gao, dp.p if dp.p > 0 else None, solver)
+    program = _PROGRAMS.get(key)
+    if program is not None and program.set(mf):
+        return program, True
+    return _PROGRAMS.put(key, ConvexProgram(mf, parametric=True)), False
 
 
 def solve_convex(dp: DiscreteProblem, solver: str = "clarabel", verbose: bool = False,

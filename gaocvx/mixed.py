@@ -32,19 +32,19 @@ matrix-vector products instead of sparse matrix-matrix products.
 
 from __future__ import annotations
 
-import collections
 import functools
 import math
-import threading
 
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
 from . import fem
+from .cache import LRU
 from .discrete import CONTACT_POINTS, GAO_POINTS, DiscreteProblem
 
-__all__ = ["MixedForm", "MixedStructure", "Hessian", "structure_of", "clear_cache"]
+__all__ = ["MixedForm", "MixedStructure", "Hessian", "structure_of", "structure_key",
+           "clear_cache"]
 
 
 def _rows(x, pts, elem, kind):
@@ -142,7 +142,7 @@ class MixedStructure:
         vals = np.stack([np.ones(N), -np.ones(N), -h], 1).ravel()
         self.C = sp.csr_matrix((vals, (rows, cols)), shape=(N, self.nz))[:, self.free].tocsr()
         self._layout()
-        self.base_factors = {}  # KKT factors of H0, by p (see MixedForm.quadratic_factor)
+        self.base_factors = LRU(4)  # KKT factors of H0, by p (see MixedForm.quadratic_factor)
 
     # ---------------------------------------------------------------- band layout
     def _layout(self):
@@ -262,35 +262,27 @@ class MixedStructure:
         return self.__dict__[key]
 
 
-# Structures of recent meshes, shared by the scenes solved on them (sweeps).  One
-# cache per thread: a Dask worker may run several blocks of a sweep in threads,
-# and a structure fills its lazy parts (maps, factors) on first use.
-_local = threading.local()
-_STRUCTURE_CACHE = 4
-
-
-def _structures() -> collections.OrderedDict:
-    if not hasattr(_local, "structures"):
-        _local.structures = collections.OrderedDict()
-    return _local.structures
+# Structures of recent meshes, shared by the scenes solved on them (sweeps).
+_STRUCTURES = LRU(4, per_thread=True)
 
 
 def clear_cache() -> None:
     """Forget this thread's cached mesh structures (benchmarks of first solves use it)."""
-    _structures().clear()
+    _STRUCTURES.clear()
+
+
+def structure_key(dp: DiscreteProblem) -> tuple:
+    """What a :class:`MixedStructure` depends on: supports, mesh, and the terms present."""
+    return (dp.scene.beam.supports, dp.xi.tobytes(), bool(dp.needs_gao or dp.p != 0), dp.contact)
 
 
 def structure_of(dp: DiscreteProblem) -> MixedStructure:
     """The (cached) :class:`MixedStructure` of a problem's mesh, supports and terms."""
-    cache = _structures()
-    slope = bool(dp.needs_gao or dp.p != 0)
-    key = (dp.scene.beam.supports, dp.xi.tobytes(), slope, dp.contact)
-    s = cache.get(key)
+    key = structure_key(dp)
+    s = _STRUCTURES.get(key)
     if s is None:
-        s = cache[key] = MixedStructure(dp.xi, dp.scene.beam.supports, slope, dp.contact)
-        while len(cache) > _STRUCTURE_CACHE:
-            cache.popitem(last=False)
-    cache.move_to_end(key)
+        supports, _, slope, contact = key
+        s = _STRUCTURES.put(key, MixedStructure(dp.xi, supports, slope, contact))
     return s
 
 
@@ -515,10 +507,8 @@ class MixedForm:
         p = float(self.dp.p) if self.has_slope else 0.0
         factor = s.base_factors.get(p)
         if factor is None:
-            factor = _KKTFactor(self.base_band.reshape(s.band_shape), s.lo, s.up, s.order, s.n)
-            s.base_factors[p] = factor
-            while len(s.base_factors) > 4:
-                s.base_factors.pop(next(iter(s.base_factors)))
+            factor = s.base_factors.put(p, _KKTFactor(self.base_band.reshape(s.band_shape),
+                                                      s.lo, s.up, s.order, s.n))
         return factor
 
     @functools.cached_property
