@@ -210,31 +210,18 @@ class _T2(_Transform):
     def __init__(self, dp, control):
         super().__init__(dp, control)
         xi = dp.xi
-        ne = len(xi) - 1
         h = np.diff(xi)
-        # Continuous quadratic elements: vertex i -> 2i, midpoint of element e -> 2e + 1.
-        dofs = np.stack([2 * np.arange(ne), 2 * np.arange(ne) + 1, 2 * np.arange(ne) + 2], 1)
         xq, wq, e = fem.gauss_points(xi, 3)
-        t = (xq - xi[e]) / h[e]
-        phi = np.stack([(1 - t) * (1 - 2 * t), 4 * t * (1 - t), t * (2 * t - 1)], 1)
-        dphi = np.stack([4 * t - 3, 4 - 8 * t, 4 * t - 1], 1) / h[e][:, None]
-        nz = 2 * ne + 1
-        rows = np.repeat(np.arange(len(xq)), 3)
-        cols = dofs[e].ravel()
-        P = sp.csr_matrix((phi.ravel(), (rows, cols)), shape=(len(xq), nz))
-        D = sp.csr_matrix((dphi.ravel(), (rows, cols)), shape=(len(xq), nz))
-        free = np.arange(1, nz)  # z(0) = 0
+        P = _quadratic_matrix(xi, xq, e)
+        D = _quadratic_matrix(xi, xq, e, deriv=1)
+        free = np.arange(1, P.shape[1])  # z(0) = 0
         W = sp.diags(wq)
         self.E = (D.T @ W @ D)[free][:, free].tocsr()
         self.echol = BandedCholesky(self.E)
         # (G, phi): G is piecewise quadratic with kinks at the load table's knots,
         # which may lie inside elements: split there for an exact integral.
         xg, wg, eg = fem.gauss_points_split(xi, _load_knots(dp), 3)
-        tg = (xg - xi[eg]) / h[eg]
-        phig = np.stack([(1 - tg) * (1 - 2 * tg), 4 * tg * (1 - tg), tg * (2 * tg - 1)], 1)
-        Pg = sp.csr_matrix((phig.ravel(), (np.repeat(np.arange(len(xg)), 3), dofs[eg].ravel())),
-                           shape=(len(xg), nz))
-        self.Gv = (Pg.T @ (wg * shear_load(dp, xg)))[free]
+        self.Gv = (_quadratic_matrix(xi, xg, eg).T @ (wg * shear_load(dp, xg)))[free]
         if control == "full":
             self.Bz = sp.identity(len(free), format="csr")
             self.unit = "N (load-vector entries)"
@@ -278,23 +265,15 @@ class _T3(_Transform):
         xi = dp.xi
         ne = len(xi) - 1
         h = np.diff(xi)
-        # Discontinuous linear moments: [m_L(e), m_R(e)] per element.
         xq, wq, e = fem.gauss_points(xi, 3)
-        t = (xq - xi[e]) / h[e]
-        rows = np.repeat(np.arange(len(xq)), 2)
-        cols = (2 * e[:, None] + np.arange(2)).ravel()
-        Pd = sp.csr_matrix((np.stack([1 - t, t], 1).ravel(), (rows, cols)), shape=(len(xq), 2 * ne))
+        Pd = _broken_linear_matrix(xi, xq, e)
         self.Md = (Pd.T @ sp.diags(wq) @ Pd).tocsc()
         # L2 projection of the load moment G onto discontinuous linears: G is
         # piecewise cubic with knots at the load table's, possibly inside elements.
         xq4, wq4, e4 = fem.gauss_points_split(xi, _load_knots(dp), 3)
-        t4 = (xq4 - xi[e4]) / h[e4]
-        rows4 = np.repeat(np.arange(len(xq4)), 2)
-        cols4 = (2 * e4[:, None] + np.arange(2)).ravel()
-        Pd4 = sp.csr_matrix((np.stack([1 - t4, t4], 1).ravel(), (rows4, cols4)),
-                            shape=(len(xq4), 2 * ne))
         self.Md_lu = spla.splu(self.Md)
-        self.mG = self.Md_lu.solve(Pd4.T @ (wq4 * moment_load(dp, xq4)))
+        self.mG = self.Md_lu.solve(_broken_linear_matrix(xi, xq4, e4).T
+                                   @ (wq4 * moment_load(dp, xq4)))
         if control == "full":
             self.Q = sp.identity(2 * ne, format="csr")
         else:
@@ -330,13 +309,42 @@ def _load_knots(dp) -> np.ndarray:
     return np.empty(0) if dp.q_table is None else dp.q_table[:, 0]
 
 
+def _element_matrix(xq, cols, vals, n) -> sp.csr_matrix:
+    """Rows at the points ``xq``: ``vals[q, k]`` in column ``cols[q, k]`` (n columns)."""
+    rows = np.repeat(np.arange(len(xq)), cols.shape[1])
+    return sp.csr_matrix((vals.ravel(), (rows, cols.ravel())), shape=(len(xq), n))
+
+
+def _local(xi, xq, e):
+    """Local coordinate t in [0, 1] of the points ``xq`` in their elements ``e``, and h."""
+    h = np.diff(xi)[e]
+    return (xq - xi[e]) / h, h
+
+
 def _hat_matrix(xi, xq, e) -> sp.csr_matrix:
     """Values of the nodal hat functions at quadrature points ``xq`` (element ``e``)."""
-    h = np.diff(xi)
-    t = (xq - xi[e]) / h[e]
-    rows = np.repeat(np.arange(len(xq)), 2)
-    cols = np.stack([e, e + 1], 1).ravel()
-    return sp.csr_matrix((np.stack([1 - t, t], 1).ravel(), (rows, cols)), shape=(len(xq), len(xi)))
+    t, _ = _local(xi, xq, e)
+    return _element_matrix(xq, np.stack([e, e + 1], 1), np.stack([1 - t, t], 1), len(xi))
+
+
+def _broken_linear_matrix(xi, xq, e) -> sp.csr_matrix:
+    """Discontinuous linears, [m_L(e), m_R(e)] per element, at the points ``xq``."""
+    t, _ = _local(xi, xq, e)
+    return _element_matrix(xq, 2 * e[:, None] + np.arange(2), np.stack([1 - t, t], 1),
+                           2 * (len(xi) - 1))
+
+
+def _quadratic_matrix(xi, xq, e, deriv: int = 0) -> sp.csr_matrix:
+    """Continuous quadratic elements, or their x-derivatives (``deriv=1``), at ``xq``.
+
+    Vertex i is DOF 2i, the midpoint of element e DOF 2e + 1.
+    """
+    t, h = _local(xi, xq, e)
+    if deriv == 0:
+        vals = np.stack([(1 - t) * (1 - 2 * t), 4 * t * (1 - t), t * (2 * t - 1)], 1)
+    else:
+        vals = np.stack([4 * t - 3, 4 - 8 * t, 4 * t - 1], 1) / h[:, None]
+    return _element_matrix(xq, 2 * e[:, None] + np.arange(3), vals, 2 * (len(xi) - 1) + 1)
 
 
 def _free_index(dp):
