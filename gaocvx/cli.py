@@ -46,12 +46,17 @@ def _dumps(obj) -> str:
     return json.dumps(clean(obj), default=_json_default)
 
 
-def _overrides(pairs) -> dict:
+def _overrides(args) -> dict:
+    """Scene overrides from ``--set`` and the options that stand for keys."""
     from .scene import parse_set
     out = {}
-    for text in pairs or ():
+    for text in args.set or ():
         key, value = parse_set(text)
         out[key] = value
+    for option, key in (("elements", "mesh.elements"), ("method", "solve.method"),
+                        ("solver", "solve.solver")):
+        if getattr(args, option, None) is not None:
+            out[key] = getattr(args, option)
     return out
 
 
@@ -59,13 +64,7 @@ def _cmd_solve(args) -> int:
     from .scene import load_scene
     from .solve import solve
 
-    overrides = _overrides(args.set)
-    if args.elements is not None:
-        overrides["mesh.elements"] = args.elements
-    if args.method is not None:
-        overrides["solve.method"] = args.method
-    if args.solver is not None:
-        overrides["solve.solver"] = args.solver
+    overrides = _overrides(args)
     worst = EXIT_OK
     for path in args.scenes:
         record, code = {"scene": path}, EXIT_OK
@@ -103,7 +102,7 @@ def _cmd_verify(args) -> int:
     from .scene import load_scene
     from .verify import read_result_csv, verify
 
-    scene = load_scene(args.scene, _overrides(args.set))
+    scene = load_scene(args.scene, _overrides(args))
     x, w, slope = read_result_csv(args.result)
     report = verify(scene, x, w, slope, reference_elements=args.reference_elements,
                     key=args.result)
@@ -159,12 +158,7 @@ def _common(p):
 
 def _load(args):
     from .scene import load_scene
-    overrides = _overrides(args.set)
-    if args.elements is not None:
-        overrides["mesh.elements"] = args.elements
-    if args.method is not None:
-        overrides["solve.method"] = args.method
-    return load_scene(args.scene, overrides)
+    return load_scene(args.scene, _overrides(args))
 
 
 def _cmd_compare(args) -> int:

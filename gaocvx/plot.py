@@ -42,6 +42,14 @@ def _pyplot():
     return plt
 
 
+def _write(plt, fig, path: Path) -> Path:
+    """Lay out, save and close a figure; returns its path."""
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
 def _check_file(path) -> Path:
     path = Path(path)
     if path.suffix.lower() not in _SUFFIXES:
@@ -159,10 +167,7 @@ def save_plot(result, path, panels=()) -> Path:
     plot(result, axes[0, 0])
     for ax, panel in zip(axes[1:, 0], panels):
         _panel(ax, result, panel)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return _write(plt, fig, path)
 
 
 def save_compare_plot(results: dict, path) -> Path:
@@ -175,10 +180,7 @@ def save_compare_plot(results: dict, path) -> Path:
         plot(result, ax, label=f"{model}: min {result.min['w']:.4g} m, energy {result.energy:.4g} J",
              annotate=i == 0, color=colors.get(model))
     ax.set_title(f"Euler-Bernoulli and Gao, supports {result.scene.beam.supports}", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return _write(plt, fig, path)
 
 
 def save_sweep_plot(rows: list, key: str, path, reference: dict | None = None,
@@ -208,7 +210,4 @@ def save_sweep_plot(rows: list, key: str, path, reference: dict | None = None,
             ax.set_xscale("log")
     axes[-1].set_xlabel(key)
     fig.suptitle(f"sweep of {key}", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return _write(plt, fig, path)
