@@ -33,6 +33,21 @@ def scene_dict(supports="P1", model="gao", q=-5e7, points=(), axial=0.0, foundat
     return d
 
 
+def compressed_scene(fraction, supports="P1", model="gao", **kw):
+    """The scene of ``scene_dict`` under an axial force of ``fraction`` times its P_bar_h."""
+    from gaocvx import DiscreteProblem, Scene
+
+    probe = DiscreteProblem(Scene.from_dict(scene_dict(supports, model, **kw)))
+    return Scene.from_dict(scene_dict(supports, model, axial=fraction * probe.P_bar_h, **kw))
+
+
+def contact(kind, gap, stiffness=5e9) -> dict:
+    """``scene_dict`` arguments for no contact (None), a foundation or a rigid obstacle."""
+    if kind == "foundation":
+        return {"foundation": (gap, stiffness)}
+    return {"obstacle": gap} if kind == "obstacle" else {}
+
+
 @pytest.fixture
 def thesis_scene():
     return copy.deepcopy(scene_dict())

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from conftest import scene_dict
+from conftest import compressed_scene, contact, scene_dict
 from gaocvx import DiscreteProblem, Scene, solve
 from gaocvx.solve import choose_method
 
@@ -26,9 +26,7 @@ def test_newton_matches_convex(supports, model, kind, axial_fraction):
     if supports == "P3" and "foundation" in args:
         args["q"] = -5e7
         args["foundation"] = (0.02, args["foundation"][1])
-    probe = DiscreteProblem(Scene.from_dict(scene_dict(supports, model, elements=16, **args)))
-    scene = Scene.from_dict(scene_dict(supports, model, elements=16,
-                                       axial=axial_fraction * probe.P_bar_h, **args))
+    scene = compressed_scene(axial_fraction, supports, model, elements=16, **args)
     a = solve(scene, "newton")
     b = solve(scene, "convex")
     assert a.success, a.message
@@ -102,21 +100,19 @@ def test_degenerate_scenes(method):
 
 
 @pytest.mark.parametrize("supports", ["P1", "P2", "P3", "P4"])
-@pytest.mark.parametrize("contact", ["foundation", "obstacle"])
-def test_band_assembly_equals_sparse_products(supports, contact):
+@pytest.mark.parametrize("kind", ["foundation", "obstacle"])
+def test_band_assembly_equals_sparse_products(supports, kind):
     """The KKT band from precomputed weight maps is the matrix of the sparse products."""
     import scipy.sparse as sp
 
     from gaocvx.mixed import Hessian, MixedForm
 
-    extra = dict(foundation=(0.001, 5e9)) if contact == "foundation" else dict(obstacle=0.001)
-    probe = DiscreteProblem(Scene.from_dict(scene_dict(supports, "gao", elements=9, **extra)))
-    scene = Scene.from_dict(scene_dict(supports, "gao", elements=9, axial=0.3 * probe.P_bar_h,
-                                       points=[(0.37, -1e8)], **extra))
+    scene = compressed_scene(0.3, supports, "gao", elements=9, points=[(0.37, -1e8)],
+                             **contact(kind, 0.001))
     mf = MixedForm(DiscreteProblem(scene))
     rng = np.random.default_rng(1)
     gao, found = rng.uniform(0, 3, mf.B1.shape[0]), rng.uniform(0, 3, mf.Nq.shape[0])
-    obst = rng.uniform(0, 3, mf.A.shape[0]) if contact == "obstacle" else None
+    obst = rng.uniform(0, 3, mf.A.shape[0]) if kind == "obstacle" else None
     H = Hessian(mf, gao, found, obst)
     dense = (mf.B2.T @ sp.diags(mf.wq2) @ mf.B2 - mf.dp.p * mf.B1.T @ sp.diags(mf.wq5) @ mf.B1
              + mf.B1.T @ sp.diags(gao) @ mf.B1 + mf.Nq.T @ sp.diags(found) @ mf.Nq)
@@ -143,9 +139,8 @@ def test_convex_certifies_gao_with_steep_slopes(supports, fraction):
     Before the Gao cones were scaled by the slope of the Ritz estimate, Clarabel
     ended these 'optimal_inaccurate' (nodal errors up to 2e-3 at 0.999 P_bar_h).
     """
-    kw = dict(q=None, points=[(0.25, -5e7), (0.6, 3e7)], elements=64)
-    probe = DiscreteProblem(Scene.from_dict(scene_dict(supports, "gao", **kw)))
-    scene = Scene.from_dict(scene_dict(supports, "gao", axial=fraction * probe.P_bar_h, **kw))
+    scene = compressed_scene(fraction, supports, "gao", q=None,
+                             points=[(0.25, -5e7), (0.6, 3e7)], elements=64)
     a, b = solve(scene, "newton"), solve(scene, "convex")
     assert a.success and b.success, (a.message, b.message)
     assert b.residual["stationarity"] < 1e-7
@@ -160,9 +155,9 @@ def _loads(top):
 @given(supports=st.sampled_from(["P1", "P2", "P3", "P4"]),
        model=st.sampled_from(["gao", "euler-bernoulli"]),
        q=_loads(2e9), force=_loads(5e8), where=st.floats(0.05, 1.0),
-       fraction=st.floats(-1.0, 0.99), contact=st.sampled_from([None, "foundation", "obstacle"]),
+       fraction=st.floats(-1.0, 0.99), kind=st.sampled_from([None, "foundation", "obstacle"]),
        gap=st.floats(0.0, 0.05))
-def test_deflection_bound_holds(supports, model, q, force, where, fraction, contact, gap):
+def test_deflection_bound_holds(supports, model, q, force, where, fraction, kind, gap):
     """max |w| of the certified minimiser never exceeds MixedForm.deflection_bound.
 
     The convex program raises a far contact level to twice this bound, which is
@@ -170,14 +165,8 @@ def test_deflection_bound_holds(supports, model, q, force, where, fraction, cont
     """
     from gaocvx.mixed import MixedForm
 
-    extra = {}
-    if contact == "foundation":
-        extra["foundation"] = (gap, 5e9)
-    elif contact == "obstacle":
-        extra["obstacle"] = gap
-    kw = dict(q=q, points=[(where, force)], elements=12, **extra)
-    probe = DiscreteProblem(Scene.from_dict(scene_dict(supports, model, **kw)))
-    scene = Scene.from_dict(scene_dict(supports, model, axial=fraction * probe.P_bar_h, **kw))
+    scene = compressed_scene(fraction, supports, model, q=q, points=[(where, force)],
+                             elements=12, **contact(kind, gap))
     dp = DiscreteProblem(scene)
     r = solve(scene, "newton", problem=dp)
     assert r.success, r.message
@@ -199,19 +188,13 @@ def test_far_foundation_convex():
 @given(supports=st.sampled_from(["P1", "P2", "P3", "P4"]),
        model=st.sampled_from(["gao", "euler-bernoulli"]),
        q=_loads(2e9), force=_loads(5e8), where=st.floats(0.05, 1.0),
-       fraction=st.floats(-1.0, 0.9), contact=st.sampled_from([None, "foundation", "obstacle"]),
+       fraction=st.floats(-1.0, 0.9), kind=st.sampled_from([None, "foundation", "obstacle"]),
        gap=st.floats(0.0, 0.05), stiffness=st.floats(1e6, 1e13))
 def test_newton_and_convex_agree_on_random_scenes(supports, model, q, force, where, fraction,
-                                                  contact, gap, stiffness):
+                                                  kind, gap, stiffness):
     """Newton certifies every scene; where the convex program does too, they agree."""
-    extra = {}
-    if contact == "foundation":
-        extra["foundation"] = (gap, stiffness)
-    elif contact == "obstacle":
-        extra["obstacle"] = gap
-    kw = dict(q=q, points=[(where, force)], elements=10, **extra)
-    probe = DiscreteProblem(Scene.from_dict(scene_dict(supports, model, **kw)))
-    scene = Scene.from_dict(scene_dict(supports, model, axial=fraction * probe.P_bar_h, **kw))
+    scene = compressed_scene(fraction, supports, model, q=q, points=[(where, force)],
+                             elements=10, **contact(kind, gap, stiffness))
     a = solve(scene, "newton")
     assert a.success, a.message
     b = solve(scene, "convex")

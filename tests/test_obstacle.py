@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from conftest import EI_THESIS, scene_dict
+from conftest import EI_THESIS, compressed_scene, scene_dict
 from exact import ExactBeam
 from gaocvx import DiscreteProblem, Scene, solve
 from gaocvx.mixed import MixedForm
@@ -142,9 +142,8 @@ def test_clarabel_ladder_settings_do_not_leak():
     ladder (static regularisation 1e-12) fails, and the next rungs must run with
     their own settings (CVXPY kept the first rung's for later solves of the
     same problem, so every rung failed)."""
-    kw = dict(q=100.0, points=[(0.25, 0.0)], elements=10, obstacle=0.0)
-    probe = DiscreteProblem(Scene.from_dict(scene_dict("P3", "euler-bernoulli", **kw)))
-    scene = Scene.from_dict(scene_dict("P3", "euler-bernoulli", axial=0.5 * probe.P_bar_h, **kw))
+    scene = compressed_scene(0.5, "P3", "euler-bernoulli", q=100.0, points=[(0.25, 0.0)],
+                             elements=10, obstacle=0.0)
     a, b = solve(scene, "convex"), solve(scene, "newton")
     assert a.success and b.success, a.message
     assert np.abs(a.w - b.w).max() <= 1e-7 * np.abs(b.w).max()
@@ -154,9 +153,7 @@ def test_clarabel_ladder_settings_do_not_leak():
 def test_no_load_is_exactly_zero(contact):
     """No load: every energy term is >= 0 and vanishes at w = 0 (also under compression)."""
     extra = dict(foundation=(0.03, 1e10)) if contact == "foundation" else dict(obstacle=0.0)
-    kw = dict(q=0.0, elements=10, **extra)
-    probe = DiscreteProblem(Scene.from_dict(scene_dict("P1", "euler-bernoulli", **kw)))
-    scene = Scene.from_dict(scene_dict("P1", "euler-bernoulli", axial=0.5 * probe.P_bar_h, **kw))
+    scene = compressed_scene(0.5, "P1", "euler-bernoulli", q=0.0, elements=10, **extra)
     for method in ("convex", "newton"):
         r = solve(scene, method)
         assert r.success and np.abs(r.w).max() == 0.0, (method, r.message)
