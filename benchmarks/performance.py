@@ -214,7 +214,7 @@ def main():
     reuse = sweep_reuse()
     command = "python benchmarks/performance.py" + (" --quick" if args.quick else "") + \
         (f" --output {args.output}" if args.output else "")
-    md = [f"# Performance: run time against error\n",
+    md = ["# Performance: run time against error\n",
           f"Made by `{command}` on {time.strftime('%Y-%m-%d')}. Machine: {machine()}.",
           "Times are medians of repeated runs of `gaocvx.solve` (setup, solve, certificate and",
           "result included), each a first solve on its mesh: the cache of mesh structures",
