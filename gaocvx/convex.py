@@ -45,7 +45,7 @@ from .errors import SceneError, SolverError
 from .linalg import BandedCholesky, NotPositiveDefinite
 from .cache import LRU
 from .mixed import MixedForm, structure_key
-from .newton import certify, passes
+from .newton import answer, certify, passes
 
 __all__ = ["solve_convex", "ConvexProgram"]
 
@@ -308,13 +308,9 @@ def solve_convex(dp: DiscreteProblem, solver: str = "clarabel", verbose: bool = 
         # under compression), so the solver is not called.
         z = np.zeros(mf.n)
         lam = None if dp.contact != "obstacle" else np.zeros(mf.A.shape[0])
-        residual = certify(mf, z, lam)
-        status = "optimal" if passes(residual) else "inaccurate"
-        return {"u": mf.to_hermite(z), "lam": lam, "status": status,
-                "message": "no load: w = 0 is the exact minimiser (every energy term is >= 0 "
-                           "and vanishes there); the solver was not called",
-                "residual": residual, "nit": 0, "solver": solver,
-                "solve_time": time.perf_counter() - t0, "mixed": mf, "z": z, "reused": False}
+        return answer(mf, z, lam, certify(mf, z, lam),
+                      "no load: w = 0 is the exact minimiser (every energy term is >= 0 and "
+                      "vanishes there); the solver was not called", 0, solver, t0, reused=False)
     program, reused = _program(mf, solver, reuse)
     if solver == "osqp":
         attempts = [dict(solver=cp.OSQP, **s) for s in OSQP_LADDER]
@@ -351,15 +347,9 @@ def solve_convex(dp: DiscreteProblem, solver: str = "clarabel", verbose: bool = 
     # solver's own label is kept in the message.
     measures = ", ".join(f"{k}={v:.2e}" for k, v in residual.items())
     if passes(residual):
-        result_status = "optimal"
         message = f"{solver} status {status!r}; optimality conditions verified ({measures})"
     else:
-        result_status = "inaccurate"
         message = f"{solver} status {status!r}; optimality conditions NOT met ({measures})"
         log.warning("convex solve not certified optimal: %s", message)
-    stats = program.problem.solver_stats
-    return {
-        "u": mf.to_hermite(z), "lam": lam, "status": result_status, "message": message,
-        "residual": residual, "nit": getattr(stats, "num_iters", None), "solver": solver,
-        "solve_time": time.perf_counter() - t0, "mixed": mf, "z": z, "reused": reused,
-    }
+    nit = getattr(program.problem.solver_stats, "num_iters", None)
+    return answer(mf, z, lam, residual, message, nit, solver, t0, reused=reused)

@@ -143,6 +143,7 @@ class MixedStructure:
         self.C = sp.csr_matrix((vals, (rows, cols)), shape=(N, self.nz))[:, self.free].tocsr()
         self._layout()
         self.base_factors = LRU(4)  # KKT factors of H0, by p (see MixedForm.quadratic_factor)
+        self._stacked = {}  # stacked weight maps, by the terms present (see stacked_map)
 
     # ---------------------------------------------------------------- band layout
     def _layout(self):
@@ -255,11 +256,12 @@ class MixedStructure:
 
     def stacked_map(self, terms: tuple) -> sp.csc_matrix:
         """The maps of ``terms`` (names among slope, contact, obstacle) side by side."""
-        key = "_stacked_" + "_".join(terms)
-        if key not in self.__dict__:
+        stacked = self._stacked.get(terms)
+        if stacked is None:
             maps = [getattr(self, name + "_map") for name in terms]
-            self.__dict__[key] = maps[0] if len(maps) == 1 else sp.hstack(maps, format="csc")
-        return self.__dict__[key]
+            stacked = self._stacked[terms] = (maps[0] if len(maps) == 1
+                                              else sp.hstack(maps, format="csc"))
+        return stacked
 
 
 # Structures of recent meshes, shared by the scenes solved on them (sweeps).

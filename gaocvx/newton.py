@@ -30,7 +30,7 @@ from .discrete import (COMPLEMENTARITY_TOL, FEASIBILITY_TOL, STATIONARITY_TOL, D
                        complementarity)
 from .mixed import MixedForm
 
-__all__ = ["solve_newton", "certify", "passes", "line_search"]
+__all__ = ["solve_newton", "certify", "passes", "line_search", "answer"]
 
 TOL = 1e-10
 MAX_ITER = 100
@@ -292,11 +292,17 @@ def passes(residual: dict) -> bool:
     return bool(ok)
 
 
+def answer(mf: MixedForm, z, lam, residual: dict, message: str, nit, solver: str, t0: float,
+           **extra) -> dict:
+    """A solver's raw result on the mixed form, its status the certificate's verdict."""
+    return {"u": mf.to_hermite(z), "lam": lam,
+            "status": "optimal" if passes(residual) else "inaccurate", "message": message,
+            "residual": residual, "nit": nit, "solver": solver,
+            "solve_time": time.perf_counter() - t0, "mixed": mf, "z": z, **extra}
+
+
 def _finish(mf, z, lam, nit, t0, note, residual=None):
     """The result dict; ``residual``: the certificate of (z, lam) if already computed."""
     residual = certify(mf, z, lam) if residual is None else residual
-    ok = passes(residual)
-    return {"u": mf.to_hermite(z), "lam": lam, "status": "optimal" if ok else "inaccurate",
-            "message": f"newton: {note}", "residual": residual, "nit": nit,
-            "solver": "banded-kkt", "solve_time": time.perf_counter() - t0,
-            "warm": {"z": mf.absolute(z), "lam": lam}, "mixed": mf, "z": z}
+    return answer(mf, z, lam, residual, f"newton: {note}", nit, "banded-kkt", t0,
+                  warm={"z": mf.absolute(z), "lam": lam})
