@@ -103,16 +103,13 @@ def _check_key(scene: Scene, key: str) -> None:
         raise SceneError(key, f"the scene has no [{section}] table to vary", key)
 
 
-# The parametric (DPP) convex program compiles as fast as a constant one (the
-# load enters as a scalar factor) and saves about 30% of each later solve; only
-# Clarabel's iterations remain, as it cannot warm-start.
-CONVEX_REUSE_MIN = 2
-
-
 def _solve_values(scene: Scene, key: str, values, method: str | None):
     """Solve values in order, reusing scale, warm starts and programs; yield (value, item)."""
     W = warm = None
-    reuse = len(values) >= CONVEX_REUSE_MIN
+    # The parametric (DPP) convex program compiles as fast as a constant one (the
+    # load enters as a scalar factor) and saves about 30% of each later solve, so
+    # it pays from the second value on; Clarabel's iterations remain.
+    reuse = len(values) > 1
     for value in values:
         try:
             s = scene_at(scene, key, float(value))

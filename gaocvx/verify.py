@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import fem
 from .discrete import DiscreteProblem
 from .errors import SceneError
 from .scene import Scene
@@ -153,7 +154,6 @@ def verify(scene: Scene, x, w, slope=None, *, reference_elements: int = REFERENC
 
     reference = solve(scene, elements=reference_elements)
     grid = np.union1d(np.linspace(0.0, scene.beam.length, GRID), np.union1d(x, reference.x))
-    from . import fem
     ours = fem.eval_matrix(x, grid, 0) @ np.ravel(np.column_stack([w, slope]))
     truth = reference.deflection(grid)
     diff = np.abs(ours - truth)
