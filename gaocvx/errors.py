@@ -11,15 +11,25 @@ result whose ``status`` says so.
 from __future__ import annotations
 
 import math
+import reprlib
 
 __all__ = ["SceneError", "SolverError", "format_value"]
+
+
+# Containers are shown only a few levels deep and a few items long: a value nested
+# 3000 deep, or a list of a million rows, must not break (or flood) the message.
+_REPR = reprlib.Repr()
+_REPR.maxlevel, _REPR.maxlist, _REPR.maxtuple, _REPR.maxdict = 3, 6, 6, 4
+_REPR.maxstring, _REPR.maxother, _REPR.maxlong = 80, 80, 40
 
 
 def format_value(value) -> str:
     """Format a user-supplied value for an error message.
 
-    Floats use a short general format, strings are quoted, anything else
-    uses ``repr``.
+    Floats use a short general format, strings are quoted, integers too long
+    to print are described by their number of digits, and containers are
+    abbreviated (a few levels, a few items), so that any value gives a short
+    line.
 
     Examples
     --------
@@ -27,6 +37,10 @@ def format_value(value) -> str:
     '5e+09'
     >>> format_value("P7")
     "'P7'"
+    >>> format_value(10**400)
+    'an integer of 401 digits'
+    >>> format_value([[[[[1.0]]]]])
+    '[[[[...]]]]'
     """
     if isinstance(value, bool):
         return "true" if value else "false"
@@ -36,9 +50,18 @@ def format_value(value) -> str:
         if math.isinf(value):
             return "inf" if value > 0 else "-inf"
         return f"{value:.6g}"
+    if isinstance(value, int) and abs(value) >= 10**40:
+        # repr() refuses integers of more than 4300 digits; count them instead.
+        digits = len(str(abs(value))) if value.bit_length() < 14000 else None
+        if digits is None:
+            return f"an integer of about {int(value.bit_length() * math.log10(2)) + 1} digits"
+        return f"an integer of {digits} digits"
     if isinstance(value, str):
-        return repr(value)
-    text = repr(value)
+        return _REPR.repr(value)
+    try:
+        text = _REPR.repr(value)
+    except (RecursionError, ValueError):  # pragma: no cover - defensive
+        text = f"<{type(value).__name__}>"
     return text if len(text) <= 80 else text[:77] + "..."
 
 

@@ -29,16 +29,20 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
+import numbers
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
+import numpy as np
+
 from .errors import SceneError
 
 __all__ = [
     "Beam", "Load", "Foundation", "Obstacle", "MeshSpec", "SolveOptions", "Scene",
-    "load_scene", "parse_set", "MODELS", "SUPPORTS", "METHODS",
+    "load_scene", "parse_set", "read_text", "check_solve_arguments", "MODELS", "SUPPORTS",
+    "METHODS", "MAX_ELEMENTS",
 ]
 
 MODELS = ("gao", "euler-bernoulli")
@@ -49,17 +53,36 @@ CONTROLS = ("P1", "full")
 MINIMIZERS = ("projected-newton", "conditional-gradient")
 SOLVERS = ("clarabel", "osqp")
 MAX_ELEMENTS = 1_000_000
+MAX_POINT_FORCES = MAX_ELEMENTS
 
 # Effective-length factors L_ef / L of the continuum buckling loads (physics.md).
 EFFECTIVE_LENGTH = {"P1": 0.5, "P2": 0.699157, "P3": 2.0, "P4": 1.0}
 
 
 # --------------------------------------------------------------------------- checks
+def _plain(value):
+    """A numpy scalar or array as the Python float, int or (nested) list it holds."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
 def _number(key: str, value, *, lo=None, hi=None, lo_open=False, hi_open=False) -> float:
-    """Return ``value`` as a finite float, or raise SceneError naming ``key``."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    """Return ``value`` as a finite float, or raise SceneError naming ``key``.
+
+    Python and numpy integers and reals are accepted (a 0-d array too); bools,
+    strings and containers are not.
+    """
+    value = _plain(value)
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise SceneError(key, "must be a number", value)
-    value = float(value)
+    try:
+        value = float(value)
+    except OverflowError:  # an integer of hundreds of digits
+        raise SceneError(key, "is too large for a double-precision number "
+                         "(about 1.8e308 at most)", value) from None
     if not math.isfinite(value):
         raise SceneError(key, "must be finite", value)
     if lo is not None and (value <= lo if lo_open else value < lo):
@@ -67,6 +90,23 @@ def _number(key: str, value, *, lo=None, hi=None, lo_open=False, hi_open=False) 
     if hi is not None and (value >= hi if hi_open else value > hi):
         raise SceneError(key, f"must be {'<' if hi_open else '<='} {hi:g}", value)
     return value
+
+
+def _whole(key: str, value, lo: int, hi: int) -> int:
+    """Return ``value`` as an int in [lo, hi], or raise SceneError naming ``key``.
+
+    Integers (Python or numpy) and integral floats such as ``8.0`` are
+    accepted; bools, strings and fractions such as ``2.5`` are not.
+    """
+    v = _plain(value)
+    if isinstance(v, float) and v.is_integer():
+        v = int(v)
+    if isinstance(v, bool) or not isinstance(v, numbers.Integral):
+        raise SceneError(key, "must be a whole number", value)
+    v = int(v)
+    if not lo <= v <= hi:
+        raise SceneError(key, f"must be between {lo} and {hi}", v)
+    return v
 
 
 def _choice(key: str, value, options) -> str:
@@ -83,10 +123,12 @@ def _table(key: str, value) -> Mapping:
 
 
 def _pairs(key: str, value) -> list:
+    value = _plain(value)
     if not isinstance(value, (list, tuple)):
         raise SceneError(key, "must be a list of [x, value] pairs", value)
     out = []
     for i, pair in enumerate(value):
+        pair = _plain(pair)
         if not isinstance(pair, (list, tuple)) or len(pair) != 2:
             raise SceneError(f"{key}[{i}]", "must be a pair [x, value]", pair)
         out.append((_number(f"{key}[{i}][0]", pair[0]), _number(f"{key}[{i}][1]", pair[1])))
@@ -240,6 +282,7 @@ class Load:
 
     def __post_init__(self):
         set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731
+        set_("q", _plain(self.q))
         if self.q is not None:
             if isinstance(self.q, (list, tuple)):
                 table = _pairs("load.q", self.q)
@@ -252,7 +295,11 @@ class Load:
                 set_("q", tuple(table))
             else:
                 set_("q", _number("load.q", self.q))
-        set_("points", tuple(_pairs("load.points", self.points)))
+        points = _plain(self.points)
+        if isinstance(points, (list, tuple)) and len(points) > MAX_POINT_FORCES:
+            raise SceneError("load.points", f"at most {MAX_POINT_FORCES} point forces "
+                             "(each may need a node of its own)", f"{len(points)} forces")
+        set_("points", tuple(_pairs("load.points", points)))
         set_("axial", _number("load.axial", self.axial))
 
     @property
@@ -293,14 +340,8 @@ class MeshSpec:
     KEYS = ("elements",)
 
     def __post_init__(self):
-        e = self.elements
-        if isinstance(e, float) and e.is_integer():
-            e = int(e)
-        if isinstance(e, bool) or not isinstance(e, int):
-            raise SceneError("mesh.elements", "must be a whole number", self.elements)
-        if not 1 <= e <= MAX_ELEMENTS:
-            raise SceneError("mesh.elements", f"must be between 1 and {MAX_ELEMENTS}", e)
-        object.__setattr__(self, "elements", e)
+        object.__setattr__(self, "elements",
+                           _whole("mesh.elements", self.elements, 1, MAX_ELEMENTS))
 
 
 @dataclass(frozen=True)
@@ -452,6 +493,63 @@ class Scene:
         return Scene.from_dict(data)
 
 
+def check_solve_arguments(scene, method=None, elements=None, solver=None) -> Scene:
+    """Validate the arguments of :func:`gaocvx.solve` and return the scene to solve.
+
+    Parameters
+    ----------
+    scene : Scene or Mapping
+        A dict with the structure of a scene file is validated into a Scene.
+    method : str, optional
+        One of :data:`METHODS`.
+    elements : int, optional
+        A whole number of elements in [1, MAX_ELEMENTS]; integral floats such
+        as ``8.0`` and numpy integers are accepted, ``2.5``, ``"8"`` and bools
+        are not.
+    solver : str, optional
+        One of ``"clarabel"``, ``"osqp"``.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        Naming the argument (``scene``, ``method``, ``elements``, ``solver``)
+        or the scene key; ``mesh.elements`` when the mesh would need more
+        memory than is available (:mod:`gaocvx.limits`).
+
+    Examples
+    --------
+    >>> scene = check_solve_arguments({"beam": {"model": "euler-bernoulli",
+    ...     "supports": "P4", "length": 1.0, "EI": 1e6}}, elements=8.0)
+    >>> type(scene).__name__
+    'Scene'
+    >>> check_solve_arguments(scene, elements=2.5)
+    Traceback (most recent call last):
+    ...
+    gaocvx.errors.SceneError: elements: must be a whole number (got 2.5)
+    """
+    if isinstance(scene, Mapping):
+        scene = Scene.from_dict(scene)
+    elif not isinstance(scene, Scene):
+        raise SceneError("scene", "must be a Scene or a dict with the structure of a scene "
+                         "file", type(scene).__name__)
+    if method is not None:
+        _choice("method", method, METHODS)
+    if solver is not None:
+        _choice("solver", solver, SOLVERS)
+    n = scene.mesh.elements
+    if elements is not None:
+        n = _whole("elements", elements, 1, MAX_ELEMENTS)
+    from .limits import check_memory
+    chosen = method or scene.solve.method
+    # Each point force may add a node: count them, the estimate is an upper bound.
+    check_memory(n + len(scene.load.points), chosen, scene.contact, "mesh.elements", n)
+    return scene
+
+
 def _assign(data: dict, path: str, value) -> None:
     parts = path.split(".")
     if len(parts) != 2 or not all(parts):
@@ -460,6 +558,76 @@ def _assign(data: dict, path: str, value) -> None:
     if section not in _PARTS:
         raise SceneError(path, f"unknown table {section!r} (known: {', '.join(_PARTS)})", path)
     data.setdefault(section, {})[key] = value
+
+
+# A scene needs arrays two levels deep ([[x, q], ...]); this is far beyond any.
+MAX_NESTING = 64
+
+
+def _nesting_depth(text: str) -> tuple[int, int]:
+    """The deepest bracket nesting of TOML text and the line where it is reached.
+
+    Brackets inside strings and comments are skipped roughly (quotes toggle a
+    string, ``#`` outside one ends the line); good enough to find the key of
+    an absurdly deep array, which is all this is for.
+    """
+    depth = deepest = 0
+    where = 1
+    for number, line in enumerate(text.splitlines(), start=1):
+        quote = None
+        for ch in line:
+            if quote:
+                if ch == quote:
+                    quote = None
+            elif ch in "\"'":
+                quote = ch
+            elif ch == "#":
+                break
+            elif ch in "[{":
+                depth += 1
+                if depth > deepest:
+                    deepest, where = depth, number
+            elif ch in "]}":
+                depth = max(depth - 1, 0)
+    return deepest, where
+
+
+def _key_at_line(text: str, line: int) -> str | None:
+    """The dotted key whose value starts at or before ``line`` of a TOML text."""
+    table, key = "", None
+    for number, raw in enumerate(text.splitlines(), start=1):
+        if number > line:
+            break
+        stripped = raw.strip()
+        header = stripped.startswith("[") and stripped.rstrip().endswith("]") and "=" not in stripped
+        if header:
+            table, key = stripped.strip("[] \t"), None
+        elif "=" in stripped and not stripped.startswith("#"):
+            key = stripped.split("=", 1)[0].strip().strip("\"'")
+    if key is None:
+        return table or None
+    return f"{table}.{key}" if table else key
+
+
+def _parse_toml(text: str, where: str, *, value_key: str | None = None) -> dict:
+    """Parse TOML text, turning every failure into one SceneError.
+
+    ``where`` names the source (a file) for syntax errors; ``value_key`` is
+    the dotted key when the text is one ``--set`` value.
+    """
+    depth, line = _nesting_depth(text)
+    if depth > MAX_NESTING:
+        key = value_key or _key_at_line(text, line) or where
+        raise SceneError(key, f"arrays or tables nested more than {MAX_NESTING} "
+                         f"levels deep", f"{depth} levels at line {line}")
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError:
+        raise
+    except RecursionError:  # pragma: no cover - the depth check above comes first
+        raise SceneError(value_key or where, "nested too deeply to read") from None
+    except ValueError as exc:  # e.g. an integer of more than 4300 digits
+        raise SceneError(value_key or where, f"cannot read a value: {exc}") from None
 
 
 def parse_set(text: str) -> tuple[str, Any]:
@@ -481,7 +649,7 @@ def parse_set(text: str) -> tuple[str, Any]:
     if not key:
         raise SceneError("--set", "must be KEY=VALUE", text)
     try:
-        value = tomllib.loads(f"v = {raw}")["v"]
+        value = _parse_toml(f"v = {raw}", "--set", value_key=key)["v"]
     except tomllib.TOMLDecodeError:
         if raw and all(c.isalnum() or c in "-_." for c in raw):
             value = raw
@@ -490,21 +658,51 @@ def parse_set(text: str) -> tuple[str, Any]:
     return key, value
 
 
+def read_text(path, what: str = "scene file") -> str:
+    """The text of a UTF-8 file; a byte-order mark is skipped.
+
+    Raises
+    ------
+    SceneError
+        Keyed by the path, when the file cannot be read or is not UTF-8 text
+        (a UTF-16 file is named as such).
+    """
+    path = Path(path)
+    key = str(path)
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise SceneError(key, f"cannot read the {what}: {exc.strerror or exc}", key) from None
+    except MemoryError:
+        raise SceneError(key, f"the {what} is too large to read") from None
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise SceneError(key, f"the {what} is UTF-16 text; save it as UTF-8", "UTF-16")
+    nul = data.find(b"\x00")
+    if nul >= 0:
+        raise SceneError(key, f"the {what} contains NUL bytes (UTF-16 without a byte-order "
+                         "mark, or binary data); save it as UTF-8 text", f"byte {nul}")
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise SceneError(key, f"the {what} is not UTF-8 text: byte 0x{data[exc.start]:02x} "
+                         f"at line {line} cannot be decoded; save it as UTF-8",
+                         f"byte {exc.start}") from None
+
+
 def load_scene(path, overrides: Mapping[str, Any] | None = None) -> Scene:
     """Read and validate a TOML scene file, applying dotted-key overrides.
+
+    The file must be UTF-8 (a byte-order mark is allowed).
 
     Raises
     ------
     SceneError
         If the file cannot be read or parsed, or any value is invalid.
     """
-    path = Path(path)
+    text = read_text(path)
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise SceneError(str(path), f"cannot read the scene file: {exc.strerror}", str(path)) from None
-    try:
-        data = tomllib.loads(text)
+        data = _parse_toml(text, str(path))
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(str(path), f"not valid TOML: {exc}") from None
     for key, value in (overrides or {}).items():
