@@ -25,7 +25,7 @@ from .discrete import DiscreteProblem
 from .errors import SceneError, SolverError
 from .newton import solve_newton
 from .result import Result, contact_zones
-from .scene import METHODS, Scene
+from .scene import METHODS, Scene, check_solve_arguments
 
 __all__ = ["solve", "choose_method", "make_result"]
 
@@ -74,6 +74,7 @@ def solve(scene: Scene, method: str | None = None, *, elements: int | None = Non
         If the method returns no solution at all.  A solution that fails its
         optimality test is returned with ``status == "inaccurate"``.
     """
+    scene = check_solve_arguments(scene, method, elements, solver)
     t0 = time.perf_counter()
     if method is not None and method not in METHODS:
         raise SceneError("solve.method", "must be one of " + ", ".join(map(repr, METHODS)), method)
