@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import fem
+from .errors import format_value
 from .scene import Scene
 
 __all__ = ["Result", "contact_zones"]
@@ -120,28 +121,65 @@ class Result:
         return d
 
     def _eval(self, xs, deriv):
-        xs = np.asarray(xs, float)
+        """Values of the ``deriv``-th derivative of the Hermite interpolant at ``xs``.
+
+        Raises
+        ------
+        ValueError
+            Naming ``xs``, for anything but real numbers on the beam: strings,
+            bools, complex numbers, NaN, or points off [0, L].
+        """
+        try:
+            arr = np.asarray(xs)
+        except (ValueError, TypeError):  # a ragged list
+            arr = np.asarray(None)
+        if arr.dtype.kind not in "iuf":
+            raise ValueError(f"xs: must be a number or an array of numbers "
+                             f"(got {format_value(xs)})")
+        xs = arr.astype(float)
+        if np.isnan(xs).any():
+            raise ValueError(f"xs: must not be NaN (got {format_value(xs.tolist())})")
         L = self.scene.beam.length
         if np.any((xs < 0) | (xs > L)):
-            raise ValueError(f"points must lie on the beam [0, {L:g}]")
+            bad = xs[(xs < 0) | (xs > L)].ravel()[0]
+            raise ValueError(f"xs: points must lie on the beam [0, {L:g}] "
+                             f"(got {format_value(float(bad))})")
         flat = np.atleast_1d(xs).ravel()
         out = fem.eval_matrix(self.x, flat, deriv) @ self._dofs()
         return out.reshape(xs.shape) if xs.ndim else float(out[0])
 
     def deflection(self, xs):
-        """Deflection w [m] at any points of the beam (Hermite interpolation)."""
+        """Deflection w [m] at any points of the beam (Hermite interpolation).
+
+        Parameters
+        ----------
+        xs : float or array_like of float
+            Points in [0, L] [m].
+
+        Returns
+        -------
+        float or ndarray
+            A float for a scalar ``xs``, else an array of its shape.
+
+        Raises
+        ------
+        ValueError
+            For anything but real numbers in [0, L] (strings and NaN included).
+        """
         return self._eval(xs, 0)
 
     def slope_at(self, xs):
-        """Slope w' at any points of the beam."""
+        """Slope w' at any points of the beam (``xs`` as for :meth:`deflection`)."""
         return self._eval(xs, 1)
 
     def moment(self, xs):
-        """Bending moment M = EI w'' [N m] (piecewise linear between nodes)."""
+        """Bending moment M = EI w'' [N m] (piecewise linear between nodes; ``xs`` as for
+        :meth:`deflection`)."""
         return self.scene.beam.EI_eff * self._eval(xs, 2)
 
     def shear(self, xs):
-        """Shear force V = (EI w'')' [N] (piecewise constant between nodes)."""
+        """Shear force V = (EI w'')' [N] (piecewise constant between nodes; ``xs`` as for
+        :meth:`deflection`)."""
         return self.scene.beam.EI_eff * self._eval(xs, 3)
 
     # ------------------------------------------------------------- output
