@@ -30,17 +30,16 @@ from __future__ import annotations
 
 import csv
 import math
-from pathlib import Path
-
 import numpy as np
 
 from . import fem
 from .discrete import DiscreteProblem
 from .errors import SceneError
-from .scene import Scene
+from .scene import MAX_ELEMENTS, Scene, _number, _whole, read_text
 from .solve import solve
 
-__all__ = ["verify", "read_result_csv", "REFERENCE_ELEMENTS"]
+__all__ = ["verify", "read_result_csv", "reference_method", "check_reference_elements",
+           "thresholds_exceeded", "REFERENCE_ELEMENTS"]
 
 REFERENCE_ELEMENTS = 1024
 GRID = 20001
@@ -59,12 +58,8 @@ def read_result_csv(path) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     SceneError
         Naming the file (and column or row) for anything unreadable.
     """
-    path = Path(path)
     key = str(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise SceneError(key, f"cannot read the result file: {exc.strerror}", key) from None
+    text = read_text(path, "result file")
     rows = [r for r in csv.reader(text.splitlines()) if r and any(c.strip() for c in r)]
     if not rows:
         raise SceneError(key, "the result file is empty")
@@ -95,6 +90,9 @@ def _check_nodes(scene: Scene, x, w, slope, key):
     L = scene.beam.length
     if len(x) < 2:
         raise SceneError(key, "a result needs at least two nodes", len(x))
+    if not np.all(np.isfinite(x)):
+        i = int(np.argmin(np.isfinite(x)))
+        raise SceneError(f"{key}: x[{i}]", "must be finite", float(x[i]))
     if np.any(np.diff(x) <= 0):
         i = int(np.argmax(np.diff(x) <= 0)) + 1
         raise SceneError(f"{key}: x[{i}]", "x must be strictly increasing", float(x[i]))
@@ -104,21 +102,99 @@ def _check_nodes(scene: Scene, x, w, slope, key):
                          [float(x[0]), float(x[-1])])
     if len(w) != len(x) or (slope is not None and len(slope) != len(x)):
         raise SceneError(key, "x, w and slope must have the same length", len(w))
+    for name, values in (("w", w), ("slope", slope)):
+        if values is not None and not np.all(np.isfinite(values)):
+            i = int(np.argmin(np.isfinite(values)))
+            raise SceneError(f"{key}: {name}[{i}]", "must be finite", float(values[i]))
+
+
+def reference_method(scene: Scene) -> str:
+    """The method of the ground truth: the scene's own, except that CVM is never one.
+
+    A scene that asks for ``cvm`` is scored against ``auto`` (the fastest
+    exact method); ``convex`` and ``newton`` are kept.
+    """
+    return "auto" if scene.solve.method == "cvm" else scene.solve.method
+
+
+def check_reference_elements(scene: Scene, elements, key: str = "reference_elements") -> int:
+    """``elements`` as the size of a ground-truth mesh that fits, or SceneError naming ``key``.
+
+    The allowed range is 1 to :data:`~gaocvx.scene.MAX_ELEMENTS`, and no more
+    than the largest mesh whose memory estimate (:mod:`gaocvx.limits`) fits in
+    the memory available now.
+    """
+    from .limits import available_memory, max_elements_that_fit
+
+    upper, why = MAX_ELEMENTS, ""
+    fit = max_elements_that_fit(reference_method(scene), scene.contact)
+    if fit is not None and fit - len(scene.load.points) < upper:
+        upper = fit - len(scene.load.points)
+        why = (f" (the largest mesh that fits in the {available_memory() / 1e9:.3g} GB of "
+               "memory available)")
+    if upper < 1:
+        raise SceneError(key, f"no ground-truth mesh fits{why}", elements)
+    try:
+        return _whole(key, elements, 1, upper)
+    except SceneError:
+        raise SceneError(key, f"must be a whole number from 1 to {upper}{why}",
+                         elements) from None
+
+
+def _column(key: str, values) -> np.ndarray:
+    """A 1-D float array from a column of the result, or SceneError naming it."""
+    try:
+        out = np.array(values, dtype=float)  # a copy: the caller's array is not touched
+    except (TypeError, ValueError):
+        raise SceneError(key, "must be a list of numbers", values) from None
+    if out.ndim != 1:
+        raise SceneError(key, "must be a one-dimensional list of numbers", values)
+    return out
+
+
+def thresholds_exceeded(report: dict, max_gap: float | None = None,
+                        max_error: float | None = None) -> list[str]:
+    """The thresholds a verify report exceeds, each as a short sentence.
+
+    ``max_gap`` bounds ``|energy_gap_rel|`` (the energy gap relative to
+    ``|Pi_T|`` of the ground truth); ``max_error`` bounds ``max_error_rel``
+    (the largest deflection error relative to ``max |w|`` of the ground
+    truth).  Both are relative, so one threshold serves every scene.
+
+    Examples
+    --------
+    >>> thresholds_exceeded({"energy_gap_rel": 2e-3, "max_error_rel": 1e-5}, 1e-3, 1e-3)
+    ['relative energy gap 0.002 exceeds --max-gap 0.001']
+    """
+    out = []
+    if max_gap is not None and not abs(report["energy_gap_rel"]) <= max_gap:
+        out.append(f"relative energy gap {report['energy_gap_rel']:.4g} exceeds "
+                   f"--max-gap {max_gap:.4g}")
+    if max_error is not None and not report["max_error_rel"] <= max_error:
+        out.append(f"relative deflection error {report['max_error_rel']:.4g} exceeds "
+                   f"--max-error {max_error:.4g}")
+    return out
 
 
 def verify(scene: Scene, x, w, slope=None, *, reference_elements: int = REFERENCE_ELEMENTS,
-           key: str = "result") -> dict:
+           key: str = "result", max_gap: float | None = None,
+           max_error: float | None = None) -> dict:
     """Energy gap and deflection error of a result against the fine-mesh ground truth.
 
     Parameters
     ----------
     scene : Scene
     x, w : array_like
-        Nodes [m] covering [0, L] and nodal deflections [m].
+        Nodes [m] covering [0, L] and nodal deflections [m], all finite.
     slope : array_like, optional
         Nodal slopes w'; without them a cubic spline supplies them.
     reference_elements : int
-        Elements of the ground-truth mesh.
+        Elements of the ground-truth mesh (:func:`check_reference_elements`).
+    key : str
+        The name of the result in error messages (e.g. its file).
+    max_gap, max_error : float, optional
+        Thresholds (>= 0) on ``|energy_gap_rel|`` and ``max_error_rel``; see
+        :func:`thresholds_exceeded`.
 
     Returns
     -------
@@ -128,11 +204,25 @@ def verify(scene: Scene, x, w, slope=None, *, reference_elements: int = REFERENC
         ``max_error`` [m], ``max_error_rel``, ``max_error_x`` [m],
         ``boundary_violation`` (largest prescribed support value, relative),
         ``penetration`` (obstacle scenes: largest w < g [m]), ``interpolant``,
-        and ``reference`` (method, elements, status).
+        ``reference`` (method, elements, status; the method is never CVM:
+        :func:`reference_method`), and ``exceeded``, the thresholds exceeded
+        (empty when none was given or all hold).
+
+    Raises
+    ------
+    SceneError
+        For a result that is not a table of finite values covering the beam,
+        a reference mesh that is out of range or does not fit in memory, or a
+        threshold that is not a number >= 0.
     """
-    x = np.asarray(x, float)
-    w = np.asarray(w, float)
-    slope = None if slope is None else np.asarray(slope, float)
+    if isinstance(scene, dict):
+        scene = Scene.from_dict(scene)
+    limits = {name: None if value is None else _number(name, value, lo=0)
+              for name, value in (("max_gap", max_gap), ("max_error", max_error))}
+    reference_elements = check_reference_elements(scene, reference_elements)
+    x = _column(f"{key}: x", x)
+    w = _column(f"{key}: w", w)
+    slope = None if slope is None else _column(f"{key}: slope", slope)
     _check_nodes(scene, x, w, slope, key)
     x[0], x[-1] = 0.0, scene.beam.length  # within the tolerance just checked
     if slope is None:
@@ -152,7 +242,7 @@ def verify(scene: Scene, x, w, slope=None, *, reference_elements: int = REFERENC
     boundary = float(np.abs(full[fixed]).max(initial=0.0) / scale)
     energy = dp.energy(full[dp.free]) * dp.E0
 
-    reference = solve(scene, elements=reference_elements)
+    reference = solve(scene, reference_method(scene), elements=reference_elements)
     grid = np.union1d(np.linspace(0.0, scene.beam.length, GRID), np.union1d(x, reference.x))
     ours = fem.eval_matrix(x, grid, 0) @ np.ravel(np.column_stack([w, slope]))
     truth = reference.deflection(grid)
@@ -176,4 +266,5 @@ def verify(scene: Scene, x, w, slope=None, *, reference_elements: int = REFERENC
     }
     if scene.contact == "obstacle":
         out["penetration"] = float(max(-scene.obstacle.gap - ours.min(), 0.0))
+    out["exceeded"] = thresholds_exceeded(out, limits["max_gap"], limits["max_error"])
     return out
