@@ -11,13 +11,19 @@ import argparse
 import json
 import logging
 import math
+import os
 import sys
+from pathlib import Path
 
 from .errors import SceneError, SolverError
 
 __all__ = ["main"]
 
 EXIT_OK, EXIT_SOLVER, EXIT_INPUT = 0, 1, 2
+# Output closed early (``gaocvx solve ... --json | head -1``): stop quietly with the
+# status of a process ended by SIGPIPE, as other Unix tools do.
+EXIT_PIPE = 128 + 13
+log = logging.getLogger(__name__)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -25,6 +31,54 @@ class _Parser(argparse.ArgumentParser):
 
     def error(self, message):  # noqa: D401 - argparse API
         raise SceneError("arguments", message)
+
+
+def _count(text: str):
+    """An argparse type for element counts: ``100000``, ``1e5`` or ``2.5`` (refused later).
+
+    The value is checked where it is used, so that the message names the
+    option or key and the allowed range.
+    """
+    for convert in (int, float):
+        try:
+            return convert(text)
+        except ValueError:
+            pass
+    return text
+
+
+def _check_output(option: str, path, suffixes: bool = False) -> None:
+    """Make sure ``path`` can be written, before any work is done.
+
+    The directory must exist and the file must be writable: it is opened for
+    appending (nothing is changed) and removed again if it did not exist.
+
+    Raises
+    ------
+    SceneError
+        Naming ``option`` and the path.
+    """
+    if suffixes:
+        from .plot import _check_file
+        _check_file(path)  # .png or .svg
+    p = Path(path)
+    if p.is_dir():
+        raise SceneError(option, "is a directory, not a file", str(p))
+    parent = p.parent
+    if not parent.is_dir():
+        raise SceneError(option, f"cannot write the file: the directory {str(parent)!r} "
+                         "does not exist", str(p))
+    existed = p.exists()
+    try:
+        with open(p, "a"):
+            pass
+    except OSError as exc:
+        raise SceneError(option, f"cannot write the file: {exc.strerror or exc}", str(p)) from None
+    if not existed:
+        try:
+            p.unlink()
+        except OSError:  # pragma: no cover - removed meanwhile
+            pass
 
 
 def _json_default(value):
@@ -65,6 +119,11 @@ def _cmd_solve(args) -> int:
     from .solve import solve
 
     overrides = _overrides(args)
+    several = len(args.scenes) > 1
+    panels = [p.strip() for p in (args.panels or "").split(",") if p.strip()]
+    if args.plot:
+        for path in args.scenes:
+            _check_output("--plot", _plot_name(args.plot, path, len(args.scenes)), suffixes=True)
     worst = EXIT_OK
     for path in args.scenes:
         record, code = {"scene": path}, EXIT_OK
@@ -78,34 +137,57 @@ def _cmd_solve(args) -> int:
                       file=sys.stderr)
             if args.plot:
                 from .plot import save_plot
-                panels = [p.strip() for p in (args.panels or "").split(",") if p.strip()]
                 save_plot(result, _plot_name(args.plot, path, len(args.scenes)), panels)
         except SceneError as exc:
             code = EXIT_INPUT
             record.update(status="error", error=str(exc))
-            print(f"error: {exc}", file=sys.stderr)
+            # With several scenes the line names the file: error: b.toml: load.axial: ...
+            text = str(exc)
+            if several and not text.startswith(f"{path}:"):
+                text = f"{path}: {text}"
+            print(f"error: {text}", file=sys.stderr)
         except SolverError as exc:
             code = EXIT_SOLVER
             record.update(status="error", error=str(exc))
             print(f"error: {path}: {exc}", file=sys.stderr)
+        except (BrokenPipeError, KeyboardInterrupt):
+            raise
+        except Exception as exc:  # noqa: BLE001 - one line per scene, the others still run
+            code = EXIT_SOLVER
+            text = _unexpected(exc)
+            record.update(status="error", error=text)
+            print(f"error: {path}: {text}", file=sys.stderr)
         worst = max(worst, code)
         if args.json:
             print(_dumps(record), flush=True)
         elif "error" not in record:
-            if len(args.scenes) > 1:
+            if several:
                 print(f"== {path}")
             print(result.summary(), flush=True)
     return worst
 
 
+def _unexpected(exc: BaseException) -> str:
+    """One line for an exception that is not the input's or a solver's known failure."""
+    log.debug("unexpected error", exc_info=exc)
+    if isinstance(exc, MemoryError):
+        return "out of memory (try fewer elements)"
+    if isinstance(exc, RecursionError):
+        return "input nested too deeply"
+    return f"internal error: {type(exc).__name__}: {exc} (run with -vv for the traceback)"
+
+
 def _cmd_verify(args) -> int:
-    from .scene import load_scene
-    from .verify import read_result_csv, verify
+    from .scene import _number, load_scene
+    from .verify import check_reference_elements, read_result_csv, verify
 
     scene = load_scene(args.scene, _overrides(args))
+    elements = check_reference_elements(scene, args.reference_elements, "--reference-elements")
+    max_gap = None if args.max_gap is None else _number("--max-gap", args.max_gap, lo=0)
+    max_error = None if args.max_error is None else _number("--max-error", args.max_error, lo=0)
     x, w, slope = read_result_csv(args.result)
-    report = verify(scene, x, w, slope, reference_elements=args.reference_elements,
-                    key=args.result)
+    report = verify(scene, x, w, slope, reference_elements=elements, key=args.result,
+                    max_gap=max_gap, max_error=max_error)
     report = {"scene": args.scene, "result": args.result, **report}
     ok = report["reference"]["status"] == "optimal"
     if args.json:
@@ -125,16 +207,21 @@ def _cmd_verify(args) -> int:
     if not ok:
         print(f"error: {args.scene}: ground truth not certified ({report['reference']['status']})",
               file=sys.stderr)
-    return EXIT_OK if ok else EXIT_SOLVER
+        return EXIT_SOLVER
+    if report["exceeded"]:
+        print(f"error: {args.result}: {'; '.join(report['exceeded'])}", file=sys.stderr)
+        return EXIT_SOLVER
+    return EXIT_OK
 
 
 def _cmd_report(args) -> int:
     from .report import thesis_markdown, thesis_rows
 
+    if args.output:
+        _check_output("--output", args.output)
     command = "gaocvx report thesis" + (f" --output {args.output}" if args.output else "")
     text = thesis_markdown(thesis_rows(), command)
     if args.output:
-        from pathlib import Path
         Path(args.output).write_text(text)
     else:
         print(text, end="")
@@ -144,14 +231,13 @@ def _cmd_report(args) -> int:
 def _plot_name(name: str, scene_path: str, count: int) -> str:
     if count == 1:
         return name
-    from pathlib import Path
     p = Path(name)
     return str(p.with_name(f"{p.stem}-{Path(scene_path).stem}{p.suffix}"))
 
 
 def _common(p):
     p.add_argument("--method", help="auto | convex | newton | cvm (overrides solve.method)")
-    p.add_argument("--elements", type=int, help="number of elements (overrides mesh.elements)")
+    p.add_argument("--elements", type=_count, help="number of elements (overrides mesh.elements)")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a scene value")
     p.add_argument("--json", action="store_true", help="JSON on stdout")
 
@@ -165,6 +251,8 @@ def _cmd_compare(args) -> int:
     from .solve import solve
 
     scene = _load(args)
+    if args.plot:
+        _check_output("--plot", args.plot, suffixes=True)
     if scene.beam.nu is None:
         raise SceneError("beam.nu", "missing: the gao model needs Poisson's ratio")
     results = {model: solve(_with_model(scene, model)) for model in ("euler-bernoulli", "gao")}
@@ -209,6 +297,10 @@ def _cmd_sweep(args) -> int:
     if args.jobs < 1:
         raise SceneError("--jobs", "must be at least 1", args.jobs)
     scene = _load(args)
+    if args.csv:
+        _check_output("--csv", args.csv)
+    if args.plot:
+        _check_output("--plot", args.plot, suffixes=True)
     bar = ProgressBar(f"sweep {key}")
     rows, worst = [], EXIT_OK
     for value, item in sweep(scene, key, values, jobs=args.jobs, dask=args.dask, progress=bar):
@@ -270,7 +362,7 @@ def _build_parser() -> argparse.ArgumentParser:
     p.add_argument("scenes", nargs="+", metavar="SCENE", help="scene file(s) (TOML)")
     p.add_argument("--method", help="auto | convex | newton | cvm (overrides solve.method)")
     p.add_argument("--solver", help="clarabel | osqp (convex method; overrides solve.solver)")
-    p.add_argument("--elements", type=int, help="number of elements (overrides mesh.elements)")
+    p.add_argument("--elements", type=_count, help="number of elements (overrides mesh.elements)")
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="override one scene value, e.g. --set beam.nu=0.25 (repeatable)")
     p.add_argument("--json", action="store_true", help="JSON (Lines) on stdout")
@@ -304,8 +396,13 @@ def _build_parser() -> argparse.ArgumentParser:
     p.add_argument("scene", metavar="SCENE", help="the scene the result claims to solve")
     p.add_argument("result", metavar="RESULT.csv", help="columns x, w and optionally slope")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a scene value")
-    p.add_argument("--reference-elements", type=int, default=1024, metavar="N",
+    p.add_argument("--reference-elements", type=_count, default=1024, metavar="N",
                    help="elements of the ground-truth mesh (default 1024)")
+    p.add_argument("--max-gap", type=float, metavar="G",
+                   help="exit 1 when |relative energy gap| exceeds G")
+    p.add_argument("--max-error", type=float, metavar="E",
+                   help="exit 1 when the largest deflection error, relative to max |w| of the "
+                   "ground truth, exceeds E")
     p.add_argument("--json", action="store_true", help="JSON on stdout")
     p.set_defaults(func=_cmd_verify)
 
@@ -314,6 +411,15 @@ def _build_parser() -> argparse.ArgumentParser:
     p.add_argument("--output", metavar="FILE", help="write Markdown here instead of stdout")
     p.set_defaults(func=_cmd_report)
     return parser
+
+
+def _quiet_stdout() -> None:
+    """Point stdout at /dev/null, so that flushing it at exit cannot fail again."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # no real file behind stdout (tests)
+        pass
 
 
 def main(argv=None) -> int:
@@ -341,10 +447,25 @@ def main(argv=None) -> int:
     except SolverError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_SOLVER
+    except BrokenPipeError:
+        _quiet_stdout()
+        return EXIT_PIPE
+    except KeyboardInterrupt:
+        print("error: interrupted", file=sys.stderr)
+        return 128 + 2
+    except Exception as exc:  # noqa: BLE001 - never a traceback on the command line
+        print(f"error: {_unexpected(exc)}", file=sys.stderr)
+        return EXIT_SOLVER
 
 
 def run() -> None:  # console-script entry point
-    sys.exit(main())
+    code = main()
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        _quiet_stdout()
+        code = EXIT_PIPE
+    sys.exit(code)
 
 
 if __name__ == "__main__":  # pragma: no cover
