@@ -123,15 +123,26 @@ def _table(key: str, value) -> Mapping:
 
 
 def _pairs(key: str, value) -> list:
+    """``value`` as a list of (x, value) float pairs, or SceneError naming the bad entry.
+
+    Plain float pairs take a fast path (a million point forces validate in about a
+    second); anything else goes through :func:`_number`.
+    """
     value = _plain(value)
     if not isinstance(value, (list, tuple)):
         raise SceneError(key, "must be a list of [x, value] pairs", value)
     out = []
+    append, isfinite = out.append, math.isfinite
     for i, pair in enumerate(value):
-        pair = _plain(pair)
+        if type(pair) not in (list, tuple):
+            pair = _plain(pair)
         if not isinstance(pair, (list, tuple)) or len(pair) != 2:
             raise SceneError(f"{key}[{i}]", "must be a pair [x, value]", pair)
-        out.append((_number(f"{key}[{i}][0]", pair[0]), _number(f"{key}[{i}][1]", pair[1])))
+        a, b = pair
+        if isinstance(a, float) and isinstance(b, float) and isfinite(a) and isfinite(b):
+            append((float(a), float(b)))  # float() turns np.float64 into float
+        else:
+            append((_number(f"{key}[{i}][0]", a), _number(f"{key}[{i}][1]", b)))
     return out
 
 
