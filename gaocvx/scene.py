@@ -30,6 +30,7 @@ import copy
 import dataclasses
 import math
 import numbers
+import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -575,16 +576,25 @@ def _assign(data: dict, path: str, value) -> None:
 MAX_NESTING = 64
 
 
-def _nesting_depth(text: str) -> tuple[int, int]:
-    """The deepest bracket nesting of TOML text and the line where it is reached.
+def _nesting(text: str) -> tuple[int, int, str | None]:
+    """The deepest bracket nesting of TOML text, its line, and the dotted key there.
 
-    Brackets inside strings and comments are skipped roughly (quotes toggle a
-    string, ``#`` outside one ends the line); good enough to find the key of
-    an absurdly deep array, which is all this is for.
+    Brackets inside strings and comments are skipped roughly (a quote opens a
+    string until the same quote, ``#`` outside one ends the line); table
+    headers and ``key =`` count only outside any bracket.  Good enough to name
+    the key of an absurdly deep array, which is all this is for.
     """
     depth = deepest = 0
-    where = 1
+    where, key_there = 1, None
+    table, key = "", None
     for number, line in enumerate(text.splitlines(), start=1):
+        stripped = line.strip()
+        if depth == 0 and stripped and not stripped.startswith("#"):
+            header = re.fullmatch(r"\[\[?\s*([A-Za-z0-9_.\-\"' ]+?)\s*\]\]?\s*(#.*)?", stripped)
+            if header:
+                table, key = header.group(1).replace('"', "").replace("'", ""), None
+            elif "=" in stripped:
+                key = stripped.split("=", 1)[0].strip().strip("\"'")
         quote = None
         for ch in line:
             if quote:
@@ -598,26 +608,10 @@ def _nesting_depth(text: str) -> tuple[int, int]:
                 depth += 1
                 if depth > deepest:
                     deepest, where = depth, number
+                    key_there = f"{table}.{key}" if table and key else (key or table or None)
             elif ch in "]}":
                 depth = max(depth - 1, 0)
-    return deepest, where
-
-
-def _key_at_line(text: str, line: int) -> str | None:
-    """The dotted key whose value starts at or before ``line`` of a TOML text."""
-    table, key = "", None
-    for number, raw in enumerate(text.splitlines(), start=1):
-        if number > line:
-            break
-        stripped = raw.strip()
-        header = stripped.startswith("[") and stripped.rstrip().endswith("]") and "=" not in stripped
-        if header:
-            table, key = stripped.strip("[] \t"), None
-        elif "=" in stripped and not stripped.startswith("#"):
-            key = stripped.split("=", 1)[0].strip().strip("\"'")
-    if key is None:
-        return table or None
-    return f"{table}.{key}" if table else key
+    return deepest, where, key_there
 
 
 def _parse_toml(text: str, where: str, *, value_key: str | None = None) -> dict:
@@ -626,9 +620,9 @@ def _parse_toml(text: str, where: str, *, value_key: str | None = None) -> dict:
     ``where`` names the source (a file) for syntax errors; ``value_key`` is
     the dotted key when the text is one ``--set`` value.
     """
-    depth, line = _nesting_depth(text)
+    depth, line, key = _nesting(text)
     if depth > MAX_NESTING:
-        key = value_key or _key_at_line(text, line) or where
+        key = value_key or key or where
         raise SceneError(key, f"arrays or tables nested more than {MAX_NESTING} "
                          f"levels deep", f"{depth} levels at line {line}")
     try:
