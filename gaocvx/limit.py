@@ -247,6 +247,9 @@ class ConvexityLimit:
         x = np.asarray(xi, float)
         if x.ndim != 1 or len(x) < 2 or not np.all(np.diff(x) > 0):
             raise ValueError("nodes must increase strictly")
+        if abs(x[0]) > 1e-12 or abs(x[-1] - 1.0) > 1e-12:
+            # The continuum's eigenvalues (the Temple bound, the penalty) are for L = 1.
+            raise ValueError("nodes must span [0, 1]")
         self.x = x
         self.h = h = np.diff(x)
         self.N = N = len(h)
