@@ -115,9 +115,9 @@ class DiscreteProblem:
     K and G, whose condition number ~N^4 made an eigen-solver wrong by 3 %
     at 16384 elements and a factor 1000 at 10^6.  A compressive P is accepted
     only when it is *proved* below P_bar_h: by one banded Cholesky
-    factorisation at P plus a bound of its round-off (a relative margin of
-    about 1e-9 at 64 elements, 1e-4 at 16384 and 0.1 to 2 at 10^6), or else
-    by the enclosure of P_bar_h, about 3e-14 wide.  A P within that
+    factorisation at P plus a bound of its round-off (at P = 0.99 P_bar_h a
+    margin of 2e-8 P_bar_h at 64 elements, 1e-3 at 16384, 0.04 at 10^5), or
+    else by the enclosure of P_bar_h, about 3e-14 wide.  A P within that
     enclosure is refused as "not provably below" the limit.
 
     Examples
