@@ -574,6 +574,8 @@ def _assign(data: dict, path: str, value) -> None:
 
 # A scene needs arrays two levels deep ([[x, q], ...]); this is far beyond any.
 MAX_NESTING = 64
+# Scene and result files are read whole; 10^6 point forces take ~40 MB of TOML.
+MAX_FILE_BYTES = 256 << 20
 
 
 def _nesting(text: str) -> tuple[int, int, str | None]:
@@ -664,7 +666,7 @@ def parse_set(text: str) -> tuple[str, Any]:
 
 
 def read_text(path, what: str = "scene file") -> str:
-    """The text of a UTF-8 file; a byte-order mark is skipped.
+    """The text of a UTF-8 file of at most MAX_FILE_BYTES; a byte-order mark is skipped.
 
     Raises
     ------
@@ -675,11 +677,15 @@ def read_text(path, what: str = "scene file") -> str:
     path = Path(path)
     key = str(path)
     try:
-        data = path.read_bytes()
+        with open(path, "rb") as fh:
+            data = fh.read(MAX_FILE_BYTES + 1)
     except OSError as exc:
         raise SceneError(key, f"cannot read the {what}: {exc.strerror or exc}", key) from None
     except MemoryError:
         raise SceneError(key, f"the {what} is too large to read") from None
+    if len(data) > MAX_FILE_BYTES:
+        raise SceneError(key, f"the {what} is larger than {MAX_FILE_BYTES >> 20} MB",
+                         f"more than {MAX_FILE_BYTES} bytes")
     if data.startswith((b"\xff\xfe", b"\xfe\xff")):
         raise SceneError(key, f"the {what} is UTF-16 text; save it as UTF-8", "UTF-16")
     nul = data.find(b"\x00")

@@ -97,6 +97,19 @@ def test_result_csv_with_bom_is_read(tmp_path):
     assert x.tolist() == [0.0, 1.0] and slope is None
 
 
+def test_oversized_or_endless_file_is_refused(monkeypatch, tmp_path):
+    """``gaocvx solve /dev/zero`` read forever."""
+    import gaocvx.scene
+    monkeypatch.setattr(gaocvx.scene, "MAX_FILE_BYTES", 100)
+    path = tmp_path / "big.toml"
+    path.write_text(FOUNDATION_TOML)
+    with pytest.raises(SceneError, match="larger than"):
+        load_scene(path)
+    if Path("/dev/zero").exists():
+        with pytest.raises(SceneError, match="^/dev/zero: the scene file is larger than"):
+            load_scene("/dev/zero")
+
+
 # ------------------------------------------------------------------ output paths
 @pytest.fixture
 def no_work(monkeypatch):
