@@ -75,8 +75,14 @@ CLARABEL_LADDER = {
 # OSQP (ADMM) cannot reach 1e-10 on these programs within any sensible number of
 # iterations (measured: 'user_limit' at 512 elements); its polishing step, an
 # exact solve on the guessed active set, gives the accuracy from 1e-6 on.
-OSQP_LADDER = [dict(eps_abs=1e-6, eps_rel=1e-6, max_iter=200_000, polishing=True),
-               dict(eps_abs=1e-8, eps_rel=1e-8, max_iter=400_000, polishing=True)]
+# Its iterations are not interruptible from Python, so each rung has a time limit
+# [s] (a 3059-element scene once ran 465 s); a rung that hits it is not certified
+# and the next is tried.
+OSQP_TIME_LIMIT = 60.0
+OSQP_LADDER = [dict(eps_abs=1e-6, eps_rel=1e-6, max_iter=200_000, polishing=True,
+                    time_limit=OSQP_TIME_LIMIT),
+               dict(eps_abs=1e-8, eps_rel=1e-8, max_iter=400_000, polishing=True,
+                    time_limit=OSQP_TIME_LIMIT)]
 
 
 def _explicit(ladder: list) -> list:
@@ -301,16 +307,28 @@ def solve_convex(dp: DiscreteProblem, solver: str = "clarabel", verbose: bool = 
     if solver == "osqp" and dp.needs_gao:
         raise SceneError("solve.solver", "OSQP solves quadratic programs only; the gao "
                          "model's quartic term needs clarabel", solver)
-    if mf.load_scale == 0:
+    if not mf.has_load:
         # Every energy term is >= 0 below P_bar_h and vanishes at w = 0, which is
         # admissible (g <= 0): the exact minimiser.  Interior-point iterations on
         # an optimum of value 0 can stall (measured: Clarabel's InsufficientProgress
-        # under compression), so the solver is not called.
+        # under compression), so the solver is not called.  "No load" is a load
+        # vector that is exactly zero, never a quadratic form that rounds to zero.
         z = np.zeros(mf.n)
         lam = None if dp.contact != "obstacle" else np.zeros(mf.A.shape[0])
         return answer(mf, z, lam, certify(mf, z, lam),
                       "no load: w = 0 is the exact minimiser (every energy term is >= 0 and "
                       "vanishes there); the solver was not called", 0, solver, t0, reused=False)
+    if mf.contact_out_of_reach:
+        # A foundation or obstacle provably below anything the beam reaches costs
+        # nothing: the contact-free program is solved and its answer certified on
+        # the problem with the contact (numbers of the size of a far gap in the
+        # program's constraints would make Clarabel fail).
+        free = solve_convex(dp.without_contact(), solver, verbose, reuse)
+        lam = None if dp.contact != "obstacle" else np.zeros(mf.A.shape[0])
+        z = mf.on_manifold(free["z"])
+        return answer(mf, z, lam, certify(mf, z, lam),
+                      free["message"] + f"; the {dp.contact} is out of the beam's reach",
+                      free["nit"], solver, t0, reused=free["reused"])
     program, reused = _program(mf, solver, reuse)
     if solver == "osqp":
         attempts = [dict(solver=cp.OSQP, **s) for s in OSQP_LADDER]
@@ -331,7 +349,7 @@ def solve_convex(dp: DiscreteProblem, solver: str = "clarabel", verbose: bool = 
         if program.z.value is None or status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
             log.info("%s returned %s at settings %s", solver, status, kwargs)
             continue
-        z = np.asarray(program.z.value, float)
+        z = mf.on_manifold(program.z.value)
         lam = (None if program.obstacle is None
                else np.asarray(program.obstacle.dual_value, float).ravel())
         best = (status, z, lam, certify(mf, z, lam))

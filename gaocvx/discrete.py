@@ -30,6 +30,7 @@ Examples
 
 from __future__ import annotations
 
+import copy
 import functools
 import math
 
@@ -44,7 +45,7 @@ from .linalg import BandedCholesky, NotPositiveDefinite
 from .scene import Scene
 
 __all__ = ["DiscreteProblem", "GAO_POINTS", "CONTACT_POINTS", "STATIONARITY_TOL", "FEASIBILITY_TOL",
-           "COMPLEMENTARITY_TOL"]
+           "COMPLEMENTARITY_TOL", "ZERO_ANSWER"]
 
 GAO_POINTS = 5       # exact for the degree-8 integrand (w')^4
 CONTACT_POINTS = 5   # Gauss points of the foundation term (and obstacle constraints)
@@ -57,19 +58,28 @@ FEASIBILITY_TOL = 1e-7
 # ... and complementarity below this: it is an energy, whose square root bounds the
 # error in the energy norm, so it must be below the square of STATIONARITY_TOL.
 COMPLEMENTARITY_TOL = STATIONARITY_TOL**2
-# In complementarity, a point closer to the obstacle than this (in units of the
-# deflection scale W) is touching it: a beam lying flat on the obstacle sits at
-# gaps of +-1e-11 W from round-off alone, which would otherwise dominate the bound.
+# In complementarity, a point closer to the obstacle than this (relative to the
+# answer's own size, its largest |w|) is touching it: a beam lying flat on the
+# obstacle sits at gaps of +-1e-11 of that from round-off alone, which would
+# otherwise dominate the bound.
 TOUCH_TOL = 1e-9
+# An answer smaller than this fraction of the unsupported linear answer is measured
+# against this floor instead of itself (only a beam pressed onto an obstacle has
+# one): the forces acting (load and reaction) are those of the unsupported answer,
+# and their round-off alone is ~1e-15 of it, so relative measures of a smaller
+# answer would compare round-off with round-off.  Below the floor an answer is
+# thus certified to an absolute fraction TOL * ZERO_ANSWER of the unsupported one.
+ZERO_ANSWER = 1e-6
 
 
-def complementarity(lam, gap, scale) -> float:
-    """Relative duality gap sum(lam * gap) / scale^2, gaps below TOUCH_TOL counted as contact.
+def complementarity(lam, gap, scale, size) -> float:
+    """Relative duality gap sum(lam * gap) / scale^2; gaps below TOUCH_TOL * size count as contact.
 
-    It bounds the energy excess of the answer (and its square root the relative
-    error in the energy norm).
+    ``scale`` is the answer's energy norm and ``size`` its largest deflection.
+    The value bounds the answer's relative energy excess (and its square root
+    the relative error in the energy norm).
     """
-    gap = np.where(gap > TOUCH_TOL, gap, 0.0)
+    gap = np.where(gap > TOUCH_TOL * size, gap, 0.0)
     return float(abs(lam @ gap) / scale**2)
 
 
@@ -191,10 +201,16 @@ class DiscreteProblem:
                                       for xk, Fk in scene.load.points], float).reshape(-1, 2)
 
         # Deflection scale: the size of the linear (EB, P = 0, contact-free) answer.
-        gap = scene.gap
+        # It is the unsupported linear answer's size: a first guess (solve()
+        # rescales to the answer's own size) and the floor of "zero" answers
+        # (MixedForm.zero_floor), never the size of the answer itself.
         w_lin = 0.0
         if self.n and W_fixed is None:
-            w_lin = np.max(np.abs(self._K_chol.solve(f_unit)[self._w_rows()]), initial=0.0)
+            u_lin = self._K_chol.solve(f_unit)
+            w_lin = np.max(np.abs(u_lin[self._w_rows()]), initial=0.0)
+            if w_lin == 0:  # no free deflection (one element, both ends pinned): slopes * L
+                w_lin = np.max(np.abs(u_lin), initial=0.0)
+        self.W_linear = float(w_lin) if W_fixed is None else float(W_fixed)
         if W_fixed is not None:
             self.W = float(W_fixed)  # a sweep keeps one scale for all its scenes
         elif w_lin > 0:
@@ -203,21 +219,47 @@ class DiscreteProblem:
             # No load: the answer is w = 0 and any scale serves; a gap of 1e-178 m
             # as the scale would underflow the energy scale.
             self.W = 1e-3 * L
-        self.E0 = EI * self.W**2 / L**3
-        self.f = f_unit / self.W
+        self._f_unit = f_unit
+        self._set_scale(self.W)
 
         self.P = scene.load.axial
         self.mu = beam.mu_eff
         self.p = self.P * self.mu * L**2 / EI
-        self.a = beam.E_alpha_eff * self.W**2 / EI
 
         # Foundation / obstacle.
         self.contact = scene.contact
         self.c = 0.0
-        self.g = 0.0 if gap is None else -gap / self.W
         if self.contact == "foundation":
             self.k_F = scene.foundation.stiffness
             self.c = lf * self.k_F * L**4 / EI
+
+    def _set_scale(self, W: float) -> None:
+        """Set the deflection scale W [m] and everything measured in it."""
+        scene, L, EI = self.scene, self.L, self.EI
+        self.W = float(W)
+        self.E0 = EI * self.W**2 / L**3
+        self.f = self._f_unit / self.W
+        self.a = scene.beam.E_alpha_eff * self.W**2 / EI
+        self.g = 0.0 if scene.gap is None else -scene.gap / self.W
+
+    def rescaled(self, W: float) -> "DiscreteProblem":
+        """The same problem measured in the deflection scale ``W`` [m].
+
+        The mesh, its matrices and the convexity limit do not depend on W and
+        are shared; the load, the Gao coefficient and the contact level are
+        rescaled.  Solvers take W from the answer's own size this way (see
+        :func:`gaocvx.solve.solve`).
+        """
+        new = copy.copy(self)
+        with np.errstate(over="raise", invalid="raise", divide="raise"):
+            new._set_scale(W)
+        return new
+
+    def without_contact(self) -> "DiscreteProblem":
+        """The same problem without its foundation or obstacle (for contact out of reach)."""
+        new = copy.copy(self)
+        new.contact, new.c, new.g = None, 0.0, 0.0
+        return new
 
     # ------------------------------------------------------------------ quadrature
     # The Hermite-DOF matrices below serve CVM and the scoring of results; the

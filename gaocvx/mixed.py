@@ -41,7 +41,7 @@ import scipy.sparse as sp
 
 from . import fem
 from .cache import LRU
-from .discrete import CONTACT_POINTS, GAO_POINTS, DiscreteProblem
+from .discrete import CONTACT_POINTS, GAO_POINTS, ZERO_ANSWER, DiscreteProblem
 
 __all__ = ["MixedForm", "MixedStructure", "Hessian", "structure_of", "structure_key",
            "clear_cache"]
@@ -102,6 +102,8 @@ class MixedStructure:
         mask[fixed] = False
         self.free = np.flatnonzero(mask)
         self.n = len(self.free)
+        self.w_index = np.flatnonzero(self.free % 3 == 0)  # the free deflections w_i within z
+        self.d_index = np.flatnonzero(self.free % 3 == 2)  # the chord slopes D_e (never fixed)
         self.has_slope = slope
         self.contact = contact
 
@@ -389,6 +391,17 @@ class MixedForm:
         u[1::2] = full[1::3]
         return u[self.dp.free]
 
+    def on_manifold(self, z) -> np.ndarray:
+        """``z`` with every chord slope recomputed from its deflections (link residual zero).
+
+        The answer a user gets is (w, theta): a solver's D that misses the
+        linking constraint by its tolerance would make the energy and the
+        certificate those of another function than the one reported.
+        """
+        z = np.array(z, float)
+        z[self.d_index] += self.link(z) / np.diff(self.xi)
+        return z
+
     def absolute(self, z) -> np.ndarray:
         """The mixed variables themselves (``z + origin``)."""
         return z + self.origin
@@ -514,15 +527,25 @@ class MixedForm:
         return factor
 
     @functools.cached_property
-    def load_scale(self) -> float:
-        """Energy norm of the load, sqrt(f' H0^-1 f) on the constraint manifold.
+    def has_load(self) -> bool:
+        """True when any load acts (the load vector is not exactly zero)."""
+        return bool(np.any(self.f))
 
-        H0 is the bending and axial part; its value is the size of the answer
-        of the linear problem, a scale that does not vanish with the solution
-        (a beam resting on a gap-0 obstacle has w = 0).
+    @functools.cached_property
+    def load_scale(self) -> float:
+        """Energy norm of the load, sqrt(f' H0^-1 f) on the constraint manifold; nan if not computable.
+
+        H0 is the bending and axial part: the value is the size of the answer of
+        the *unsupported linear* problem.  It serves only as a bound
+        (:meth:`deflection_bound`), never as the size of the answer.  Near
+        P_bar_h the KKT solve with H0 loses every digit: a value that is not
+        positive and finite is returned as nan, never clipped.
         """
+        if not self.has_load:
+            return 0.0
         d, _ = self.quadratic_factor.solve(self.f, np.zeros(self.N))
-        return math.sqrt(max(float(self.f @ d), 0.0))
+        value = float(self.f @ d)
+        return math.sqrt(value) if value > 0 and math.isfinite(value) else math.nan
 
     def deflection_bound(self) -> float:
         """An upper bound on max |w| of the minimiser (non-dimensional), from the load alone.
@@ -535,33 +558,77 @@ class MixedForm:
         is the continuum Green's function (the Hermite space is a subspace) and
         ``G(x, x) <= 1/3`` for every support (the cantilever's tip, in units of
         L^3/EI), ``|w*(x)| <= 2 |f|_{Q^-1} / sqrt(3 (1 - P/P_bar_h))``.
+        Infinite (no bound) when the load scale cannot be computed.
         """
         dp = self.dp
+        if not self.has_load:
+            return 0.0
         margin = 1.0 - dp.P / dp.P_bar_h if dp.P > 0 else 1.0
-        return 2.0 * self.load_scale / math.sqrt(3.0 * margin)
+        bound = 2.0 * self.load_scale / math.sqrt(3.0 * margin) if margin > 0 else math.inf
+        return bound if math.isfinite(bound) else math.inf
+
+    @property
+    def contact_out_of_reach(self) -> bool:
+        """True when the foundation or obstacle lies provably below any deflection of the minimiser.
+
+        Then the contact term vanishes near the answer and the problem is the
+        contact-free one (:meth:`deflection_bound`, with a factor 2 of margin).
+        """
+        dp = self.dp
+        return dp.contact is not None and dp.g < -2.0 * self.deflection_bound()
+
+    @property
+    def zero_floor(self) -> float:
+        """Deflection below which an answer counts as zero (non-dimensional).
+
+        A fraction ZERO_ANSWER of the unsupported linear answer's size: only a
+        beam pressed onto an obstacle at gap 0 has an answer that small, and
+        relative measures of it would compare round-off with round-off.
+        """
+        if not self.has_load:
+            return 1.0  # the answer is w = 0 exactly; any unit serves
+        return ZERO_ANSWER * self.dp.W_linear / self.dp.W
+
+    def deflection_size(self, z) -> float:
+        """The answer's own size: its largest nodal |w| (non-dimensional), at least :attr:`zero_floor`."""
+        w = self.absolute(z)[self.w_index]
+        return max(float(np.max(np.abs(w), initial=0.0)), self.zero_floor)
+
+    def energy_norm(self, z, H) -> float:
+        """``sqrt(z' H z)`` of the mixed variables, H the energy's Hessian (an obstacle's penalty left out)."""
+        if H.obstacle is not None:
+            H = Hessian(self, H.gao, H.foundation)
+        z = self.absolute(z)
+        return math.sqrt(max(float(z @ (H @ z)), 0.0))
 
     def scale(self, z, H) -> float:
-        """The size of the problem: the solution's energy norm or the load's; 1 without load."""
-        load = self.load_scale
-        if load == 0:
+        """The size of the answer: its own energy norm; 1 without any load.
+
+        Relative measures divide by this.  It is the answer's own size, not the
+        unsupported linear answer's: a stiff foundation or an obstacle can make
+        the answer a millionth of that, and a residual small against the
+        unsupported answer can then be as large as the answer itself.  The
+        floor (:attr:`zero_floor`, in energy-norm units) applies only to an
+        answer that is zero to within round-off.
+        """
+        if not self.has_load:
             return 1.0
-        z = self.absolute(z)
-        return max(math.sqrt(max(float(z @ (H @ z)), 0.0)), load)
+        return max(self.energy_norm(z, H), self.zero_floor) or 1.0
 
     def decrement(self, z, H=None, g=None, factor=None, **al) -> tuple[float, np.ndarray]:
         """Relative Newton decrement on the constraint manifold, and the Newton step.
 
-        Inside the method of multipliers (``al`` given) the scale is the load's
-        energy norm: the penalty's rho ||A z||^2 in z' H z is no measure of the
-        problem's size.  ``factor`` is a KKT factor of H to reuse.
+        The scale is the answer's own energy norm (:meth:`scale`); inside the
+        method of multipliers (``al`` given) the penalty's part of H is left out
+        of it, as rho ||A z||^2 is no measure of the answer's size.  ``factor``
+        is a KKT factor of H to reuse.
         """
         g = self.gradient(z, **al) if g is None else g
         H = self.hessian(z, **al) if H is None else H
         factor = self.kkt_factor(H) if factor is None else factor
         d, _ = factor.solve(-g, -self.link(z))
         dec2 = max(float(d @ (H @ d)), 0.0)
-        scale = (self.load_scale or 1.0) if al else self.scale(z, H)
-        return math.sqrt(dec2) / scale, d
+        return math.sqrt(dec2) / self.scale(z, H), d
 
 
 class _KKTFactor:

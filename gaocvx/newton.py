@@ -32,9 +32,12 @@ from .mixed import MixedForm
 
 __all__ = ["solve_newton", "certify", "passes", "line_search", "answer"]
 
-TOL = 1e-10
+# Newton converges quadratically: it stops at round-off (a decrement that stops
+# falling fast once below ROUNDOFF), not at the certificate's tolerance, so that
+# the answer is as accurate as double precision allows.
+TOL = 1e-14
 MAX_ITER = 100
-ROUNDOFF = 1e-9    # a decrement that stops falling below this is round-off
+ROUNDOFF = 1e-11   # a decrement that stops falling below this is round-off
 MAX_OUTER = 40     # multiplier updates for the obstacle
 # A multiplier update moves lambda by rho * (g - A z); with A z known to ~1e-13
 # (round-off), rho beyond ~1e10 turns round-off into multiplier noise.
@@ -71,16 +74,31 @@ def solve_newton(dp: DiscreteProblem, warm: dict | None = None, tol: float = TOL
         ``solve_time`` and ``warm``.
     """
     t0 = time.perf_counter()
+    warm = _rescaled_warm(warm, dp)
+    if dp.contact is not None and MixedForm(dp).contact_out_of_reach:
+        # The foundation or obstacle lies provably below anything the beam can
+        # reach: it costs nothing, so the contact-free problem is solved (an
+        # obstacle's origin 1e15 m away would turn every w - g into round-off)
+        # and its answer certified on the problem with the contact.
+        free = solve_newton(dp.without_contact(), warm, tol, max_iter)
+        mf = MixedForm(dp)
+        lam = np.zeros(mf.A.shape[0]) if dp.contact == "obstacle" else None
+        return _finish(mf, free["z"], lam, free["nit"], t0,
+                       free["message"].removeprefix("newton: ")
+                       + f"; the {dp.contact} is out of the beam's reach")
     mf = MixedForm.on_obstacle(dp) if dp.contact == "obstacle" else MixedForm(dp)
     z = -mf.origin  # the undeformed beam
     if warm is not None and len(warm.get("z", ())) == mf.n:
         z = np.array(warm["z"], float) - mf.origin
-    if dp.n == 0:
-        return _finish(mf, z, None, 0, t0, "no free degrees of freedom: w = 0")
+    if dp.n == 0 or not mf.has_load:
+        # No free DOF, or no load: every energy term is >= 0 below P_bar_h and
+        # vanishes at w = 0, which is admissible (g <= 0): the exact minimiser.
+        lam = np.zeros(mf.A.shape[0]) if dp.contact == "obstacle" else None
+        note = "no free degrees of freedom" if dp.n == 0 else "no load"
+        return _finish(mf, -mf.origin, lam, 0, t0, f"{note}: w = 0")
     if dp.contact != "obstacle":
-        z, nit, note, stationarity = _newton(mf, z, tol, max_iter, {})
-        known = None if stationarity is None else {"stationarity": stationarity}
-        return _finish(mf, z, None, nit, t0, note, known)
+        z, nit, note = _newton(mf, z, tol, max_iter, {})
+        return _finish(mf, z, None, nit, t0, note)
 
     # Method of multipliers for A z >= g.
     lam = np.zeros(mf.A.shape[0])
@@ -93,7 +111,7 @@ def solve_newton(dp: DiscreteProblem, warm: dict | None = None, tol: float = TOL
     for outer in range(1, MAX_OUTER + 1):
         # Continuation: the penalty starts gentle (a soft foundation, which Newton
         # solves from any start) and stiffens tenfold per update up to rho_max.
-        z, nit, note, _ = _newton(mf, z, tol, max_iter - total, {"shift": lam, "rho": rho})
+        z, nit, note = _newton(mf, z, tol, max_iter - total, {"shift": lam, "rho": rho})
         total += nit
         gap = mf.gap(z)
         lam = np.maximum(lam - rho * gap, 0.0)
@@ -129,6 +147,20 @@ def solve_newton(dp: DiscreteProblem, warm: dict | None = None, tol: float = TOL
     return _finish(mf, z, lam, total, t0, note, residual)
 
 
+def _rescaled_warm(warm: dict | None, dp: DiscreteProblem) -> dict | None:
+    """A warm start in the deflection scale of ``dp`` (it records the scale it was made in).
+
+    Deflections scale as 1/W, and so do the multipliers (forces per unit of
+    non-dimensional deflection in units of E0 = EI W^2 / L^3).
+    """
+    if warm is None or warm.get("W", dp.W) == dp.W:
+        return warm
+    r = warm["W"] / dp.W
+    lam = warm.get("lam")
+    return {"z": np.asarray(warm["z"], float) * r, "lam": None if lam is None else lam * r,
+            "W": dp.W}
+
+
 def _penalty(mf: MixedForm) -> tuple[float, float]:
     """Initial and largest penalty of the method of multipliers.
 
@@ -146,42 +178,52 @@ def _penalty(mf: MixedForm) -> tuple[float, float]:
     40 updates.
     """
     h = float(np.min(np.diff(mf.dp.xi)))
-    return 10.0, min(1e3 * 12.0 / (GAUSS_OFFSET * h) ** 3, RHO_CAP)
+    # Both caps are for forces of the answer's size.  An answer held far below
+    # the unsupported one (an obstacle close under a heavily loaded beam) carries
+    # forces W_linear / W larger, which need (and whose round-off allows) a
+    # penalty larger by as much: with the plain caps the violations, and with
+    # them complementarity, stayed at 1e-9..1e-5 of the answer.
+    ratio = max(1.0, mf.dp.W_linear / mf.dp.W)
+    return 10.0, min(1e3 * 12.0 / (GAUSS_OFFSET * h) ** 3, RHO_CAP) * ratio
 
 
 def _newton(mf: MixedForm, z, tol, max_iter, al):
-    """Newton iterations on the (augmented) energy.
-
-    Returns (z, iterations, note, stationarity): the last is the certificate's
-    stationarity at z when it was just computed (the Newton decrement of the
-    energy itself), else None.
-    """
+    """Newton iterations on the (augmented) energy; returns (z, iterations, note)."""
     dp = mf.dp
     if dp.is_quadratic and not al:
-        # One KKT solve: the energy is quadratic (its factor serves the certificate too).
-        d, _ = mf.quadratic_factor.solve(-mf.gradient(z), -mf.link(z))
-        return z + d, 1, "one banded KKT solve (quadratic energy)", None
+        # One KKT solve: the energy is quadratic (its factor serves the certificate
+        # too), and one step of iterative refinement with the residual of the
+        # answer takes the solve's own round-off out of it.
+        for _ in range(2):
+            d, _ = mf.quadratic_factor.solve(-mf.gradient(z), -mf.link(z))
+            z = z + d
+        return z, 1, "one banded KKT solve and one refinement (quadratic energy)"
     previous = math.inf
     for it in range(1, max(max_iter, 1) + 1):
         g = mf.gradient(z, **al)
         H = mf.hessian(z, **al)
-        decrement, d = mf.decrement(z, H, g, **al)
+        d, mu = mf.kkt_solve(H, -g, -mf.link(z))
+        decrement = math.sqrt(max(float(d @ (H @ d)), 0.0)) / mf.scale(z, H)
         if decrement <= tol:
-            # The certificate's stationarity at z is this decrement (no multipliers).
-            return z, it - 1, "Newton decrement below tolerance", None if al else decrement
+            return z, it - 1, "Newton decrement below tolerance"
         if dp.contact is not None:
-            predicted = _predict_active_set(mf, z, d, al)
-            if float(g @ predicted) < 0.5 * float(g @ d):  # keep it only if it descends
-                d = predicted
+            predicted, mu_p = _predict_active_set(mf, z, d, al)
+            if mu_p is not None and float(g @ predicted) < 0.5 * float(g @ d):
+                d, mu = predicted, mu_p  # kept only if it descends
         if decrement < ROUNDOFF and decrement > 0.5 * previous:
-            return z, it - 1, f"decrement stagnated at {decrement:.1e} (round-off)", \
-                None if al else decrement
+            return z, it - 1, f"decrement stagnated at {decrement:.1e} (round-off)"
         previous = decrement
-        t = line_search(lambda s: float(mf.gradient(z + s * d, **al) @ d), float(g @ d))
+        # Along d the Lagrangian E + mu'(C z), not E, decreases: g has a part C'mu
+        # of the size of the constraint forces, and C d = -link(z) is round-off,
+        # so near the answer g'd alone is that round-off times the forces and
+        # the line search would stall long before the answer is.
+        shift = float(mu @ (mf.C @ d))
+        t = line_search(lambda s: float(mf.gradient(z + s * d, **al) @ d) + shift,
+                        float(g @ d) + shift)
         if t is None:
-            return z, it, "line search stalled (round-off level)", None
+            return z, it, "line search stalled (round-off level)"
         z = z + t * d
-    return z, max_iter, f"stopped after {max_iter} iterations", None
+    return z, max_iter, f"stopped after {max_iter} iterations"
 
 
 def _same(a, b):
@@ -195,8 +237,10 @@ def _predict_active_set(mf, z, d, al, rounds=8):
     The contact forces are linearised on the points in contact at z + d
     (primal-dual active-set style) and the step recomputed until the set
     settles; the line search then judges the step on the true energy.
+    Returns the step and its constraint multipliers (None if unchanged).
     """
     used = mf.active_sets(z, **al)
+    mu = None
     for _ in range(rounds):
         predicted = mf.active_sets(z + d, **al)
         if _same(predicted, used):
@@ -204,8 +248,8 @@ def _predict_active_set(mf, z, d, al, rounds=8):
         used = predicted
         g = mf.gradient(z, active=used, **al)
         H = mf.hessian(z, active=used, **al)
-        d, _ = mf.kkt_solve(H, -g, -mf.link(z))
-    return d
+        d, mu = mf.kkt_solve(H, -g, -mf.link(z))
+    return d, mu
 
 
 def line_search(dphi, slope0, rtol=0.1, max_eval=30):
@@ -225,6 +269,20 @@ def line_search(dphi, slope0, rtol=0.1, max_eval=30):
     if f_hi <= 0.0:
         return 1.0
     lo, f_lo, side = 0.0, slope0, 0
+    # A step many orders too long (Newton from w = 0 near P_bar_h, where only the
+    # quartic term stops the buckling mode) leaves phi'(1) ~ 1e30: regula falsi
+    # would need hundreds of steps, so the bracket is first shrunk tenfold at a time.
+    for _ in range(60):
+        t = 0.1 * hi
+        f_t = dphi(t)
+        if f_t > 0.0 and t > 1e-300:
+            hi, f_hi = t, f_t
+            continue
+        if f_t <= 0.0 and t > 0:
+            if f_t >= rtol * slope0:
+                return t
+            lo, f_lo = t, f_t
+        break
     for _ in range(max_eval):
         t = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
         if not lo < t < hi:
@@ -252,9 +310,10 @@ def certify(mf: MixedForm, z, lam=None) -> dict:
 
     ``stationarity``: relative Newton decrement of the Lagrangian on the
     linking constraints (for a quadratic energy, the relative error in the
-    energy norm); for an obstacle also ``feasibility`` (largest violation of
-    w >= g in units of the deflection scale), ``dual`` (most negative
-    multiplier, relative) and ``complementarity`` (relative).
+    energy norm), relative to the answer's own energy norm; for an obstacle
+    also ``feasibility`` (largest violation of w >= g relative to the answer's
+    largest deflection), ``dual`` (most negative multiplier, relative) and
+    ``complementarity`` (relative to the answer's energy).
     """
     if mf.n == 0:
         return {"stationarity": 0.0}
@@ -266,20 +325,43 @@ def certify(mf: MixedForm, z, lam=None) -> dict:
 
 
 def _stationarity(mf: MixedForm, z, lam, H) -> float:
-    """Relative Newton decrement of the Lagrangian at (z, lam); H: the energy's Hessian."""
+    """Relative Newton decrement of the Lagrangian at (z, lam); H: the energy's Hessian.
+
+    The decrement is computed by a solve with H, which near P_bar_h (H nearly
+    singular) can lose every digit: the solve's own residual is then solved
+    for once more, and a correction that is not small against the step shows
+    that the decrement cannot be trusted (infinite: not certified).
+    """
     g = mf.gradient(z)
     if lam is not None:
         g = g - mf.AT @ lam
-    factor = mf.quadratic_factor if mf.dp.is_quadratic else None
-    return mf.decrement(z, H, g, factor=factor)[0]
+    factor = mf.quadratic_factor if mf.dp.is_quadratic else mf.kkt_factor(H)
+    rhs_z, rhs_c = -g, -mf.link(z)
+    d, mu = factor.solve(rhs_z, rhs_c)
+    scale = mf.scale(z, H)
+    decrement = math.sqrt(max(float(d @ (H @ d)), 0.0))
+    check, _ = factor.solve(rhs_z - (H @ d + mf.C.T @ mu), rhs_c - mf.C @ d)
+    error = math.sqrt(max(float(check @ (H @ check)), 0.0))
+    # The step's own error must be small against the step, or against what the
+    # certificate can notice (the stationarity tolerance): else the decrement
+    # is no measure of anything.
+    if not (error <= 0.1 * decrement or error <= 1e-3 * STATIONARITY_TOL * scale):
+        return math.inf
+    return decrement / scale
 
 
 def _obstacle_measures(mf: MixedForm, z, lam, gap, H) -> dict:
-    """Feasibility, dual sign and complementarity of ``z`` with multipliers ``lam``."""
+    """Feasibility, dual sign and complementarity of ``z`` with multipliers ``lam``.
+
+    All relative to the answer itself: the violation of w >= g to its largest
+    deflection, the most negative multiplier to the largest, the duality gap
+    to its energy.
+    """
+    size = mf.deflection_size(z)
     lam_scale = np.max(np.abs(lam), initial=0.0) or 1.0
-    return {"feasibility": float(max(-np.min(gap, initial=0.0), 0.0)),
+    return {"feasibility": float(max(-np.min(gap, initial=0.0), 0.0) / size),
             "dual": float(max(-np.min(lam, initial=0.0), 0.0) / lam_scale),
-            "complementarity": complementarity(lam, gap, mf.scale(z, H))}
+            "complementarity": complementarity(lam, gap, mf.scale(z, H), size)}
 
 
 def passes(residual: dict) -> bool:
@@ -294,7 +376,12 @@ def passes(residual: dict) -> bool:
 
 def answer(mf: MixedForm, z, lam, residual: dict, message: str, nit, solver: str, t0: float,
            **extra) -> dict:
-    """A solver's raw result on the mixed form, its status the certificate's verdict."""
+    """A solver's raw result on the mixed form, its status the certificate's verdict.
+
+    ``residual`` must be the certificate of ``z`` as returned here: solvers
+    put their answer on the linking constraints (:meth:`MixedForm.on_manifold`)
+    before certifying it.
+    """
     return {"u": mf.to_hermite(z), "lam": lam,
             "status": "optimal" if passes(residual) else "inaccurate", "message": message,
             "residual": residual, "nit": nit, "solver": solver,
@@ -303,6 +390,8 @@ def answer(mf: MixedForm, z, lam, residual: dict, message: str, nit, solver: str
 
 def _finish(mf, z, lam, nit, t0, note, residual=None):
     """The result dict; ``residual``: the certificate of (z, lam) if already computed."""
-    residual = certify(mf, z, lam) if residual is None else residual
+    if residual is None or np.any(mf.link(z)):
+        z = mf.on_manifold(z)
+        residual = certify(mf, z, lam)
     return answer(mf, z, lam, residual, f"newton: {note}", nit, "banded-kkt", t0,
-                  warm={"z": mf.absolute(z), "lam": lam})
+                  warm={"z": mf.absolute(z), "lam": lam, "W": mf.dp.W})

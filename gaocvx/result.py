@@ -20,15 +20,23 @@ __all__ = ["Result", "contact_zones"]
 
 
 def contact_zones(x, in_contact) -> list[list[float]]:
-    """Maximal runs of consecutive nodes in contact, as ``[x_first, x_last]``.
+    """Maximal runs of consecutive points in contact, as ``[x_first, x_last]``.
+
+    The points (nodes, and the Gauss points where contact is integrated or
+    imposed) are taken in the order of ``x``; a run of one point is a point
+    contact ``[x, x]``.
 
     Examples
     --------
     >>> contact_zones([0, 1, 2, 3, 4], [False, True, True, False, True])
     [[1.0, 2.0], [4.0, 4.0]]
+    >>> contact_zones([0, 2, 1.5], [False, False, True])
+    [[1.5, 1.5]]
     """
     x = np.asarray(x, float)
-    flag = np.concatenate([[False], np.asarray(in_contact, bool), [False]])
+    order = np.argsort(x, kind="stable")
+    x = x[order]
+    flag = np.concatenate([[False], np.asarray(in_contact, bool)[order], [False]])
     edges = np.flatnonzero(np.diff(flag.astype(int)))
     return [[float(x[a]), float(x[b - 1])] for a, b in zip(edges[0::2], edges[1::2])]
 
@@ -53,7 +61,10 @@ class Result:
     energy_parts : dict
         "bending", "gao", "axial", "load", "foundation" [J].
     zones : list of [x_first, x_last] or None
-        Contact zones (None without foundation or obstacle).
+        Contact zones (None without foundation or obstacle): the runs of
+        consecutive points in contact among the nodes and the Gauss points where
+        contact is integrated (foundation) or imposed (obstacle); ``[x, x]`` is
+        a point contact.
     reaction : ndarray or None
         Foundation reaction k_F (g - w)^+ [N/m] per node, or obstacle reaction
         force [N] per node (consistent nodal force of the constraint's
@@ -67,6 +78,9 @@ class Result:
         Optimality measures (see :meth:`DiscreteProblem.residual`).
     extra : dict
         Method-specific information added to the JSON output.
+    contact_forces : ndarray or None
+        Obstacle only: the contact forces at the constraint points that carry
+        one, rows ``[x, F]`` [m, N] (physical units); each lies in a zone.
     """
 
     scene: Scene
@@ -86,6 +100,7 @@ class Result:
     solver: str | None = None
     residual: dict = field(default_factory=dict)
     extra: dict = field(default_factory=dict)
+    contact_forces: np.ndarray | None = None
 
     @functools.cached_property
     def P_bar(self) -> float:
@@ -94,8 +109,14 @@ class Result:
 
     @property
     def success(self) -> bool:
-        """True when the status is "optimal"."""
-        return self.status == "optimal"
+        """True when the status is "optimal" and nothing says the answer is far from the minimiser.
+
+        A CVM answer may be optimal for CVM's own discrete problem and still lie
+        far above the beam's minimum energy (``extra["cvm"]["far_from_minimizer"]``,
+        see :func:`gaocvx.solve.cvm_verdict`): that is no success.
+        """
+        far = self.extra.get("cvm", {}).get("far_from_minimizer", False)
+        return self.status == "optimal" and not far
 
     @property
     def fun(self) -> float:
@@ -200,6 +221,8 @@ class Result:
             "contact": {
                 "zones": self.zones,
                 "reaction": None if self.reaction is None else self.reaction.tolist(),
+                **({} if self.contact_forces is None
+                   else {"forces": self.contact_forces.tolist()}),
             },
             "P_bar": float(self.P_bar),
             "time_s": float(self.time_s),

@@ -6,6 +6,7 @@ from hypothesis import given, settings, strategies as st
 
 from conftest import compressed_scene, contact, scene_dict
 from gaocvx import DiscreteProblem, Scene, solve
+from gaocvx.discrete import ZERO_ANSWER
 from gaocvx.solve import choose_method
 
 KINDS = {
@@ -73,7 +74,13 @@ def test_newton_obstacle_matches_convex(supports, model, kind):
     a = solve(scene, "newton")
     b = solve(scene, "convex")
     assert a.success, a.message
-    assert b.success, b.message
+    if not b.success:
+        # A beam pressed flat onto an obstacle at its own level: w = 0 to round-off.
+        # Clarabel's absolute accuracy (~1e-13 of the unsupported energy) leaves
+        # curvature noise that the certificate, in the answer's own scale, rejects.
+        assert kind == "gap-zero" and np.abs(a.w).max() <= ZERO_ANSWER * a.problem.W_linear, \
+            b.message
+        return
     scale = np.abs(b.w).max() or 1.0
     assert np.abs(a.w - b.w).max() <= 1e-6 * max(scale, 1e-3)
     # Energy scale: the load's work on the obstacle-free beam (w = 0 for gap 0).
@@ -147,6 +154,18 @@ def test_convex_certifies_gao_with_steep_slopes(supports, fraction):
     assert np.abs(a.w - b.w).max() <= 1e-7 * np.abs(a.w).max()
 
 
+def _below_multiplier_limit(result) -> bool:
+    """An obstacle answer under 1e-4 of the unsupported one, where Newton may say inaccurate.
+
+    Its forces are then 1e4+ times those the answer's own size would carry, and
+    the method of multipliers cannot always drive violation and complementarity
+    below 1e-7 and 1e-12 *of the answer* (docs/model.md, "What the certificate
+    guarantees").  Such an answer must then say "inaccurate", never "optimal".
+    """
+    return (result.status == "inaccurate" and result.scene.contact == "obstacle"
+            and np.abs(result.w).max() < 1e-4 * result.problem.W_linear)
+
+
 def _loads(top):
     return st.one_of(st.just(0.0), st.floats(1e2, top), st.floats(-top, -1e2))
 
@@ -169,7 +188,7 @@ def test_deflection_bound_holds(supports, model, q, force, where, fraction, kind
                              elements=12, **contact(kind, gap))
     dp = DiscreteProblem(scene)
     r = solve(scene, "newton", problem=dp)
-    assert r.success, r.message
+    assert r.success or _below_multiplier_limit(r), r.message
     bound = MixedForm(dp).deflection_bound() * dp.W
     assert np.abs(r.w).max() <= bound * (1 + 1e-9) + 1e-300
 
@@ -196,8 +215,8 @@ def test_newton_and_convex_agree_on_random_scenes(supports, model, q, force, whe
     scene = compressed_scene(fraction, supports, model, q=q, points=[(where, force)],
                              elements=10, **contact(kind, gap, stiffness))
     a = solve(scene, "newton")
-    assert a.success, a.message
+    assert a.success or _below_multiplier_limit(a), a.message
     b = solve(scene, "convex")
-    if b.success:
+    if a.success and b.success:
         scale = max(np.abs(a.w).max(), DiscreteProblem(scene).W)
         assert np.abs(a.w - b.w).max() <= 2e-6 * scale, (a.message, b.message)

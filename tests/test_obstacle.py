@@ -112,9 +112,13 @@ def test_gap_zero_obstacle():
     """A beam pushed down onto an obstacle at its own level stays at w = 0 and the
     obstacle carries the whole load; pushed up, it leaves the obstacle (supports alone
     do not count as contact)."""
-    down = solve(Scene.from_dict(scene_dict("P4", q=-5e7, obstacle=0.0)), "convex")
+    down = solve(Scene.from_dict(scene_dict("P4", q=-5e7, obstacle=0.0)), "newton")
     assert down.success and down.zones == [[0.0, 1.0]]
-    assert np.abs(down.w).max() < 1e-9
+    assert np.abs(down.w).max() < 1e-15
+    # Clarabel leaves curvature noise of ~1e-9 of the unsupported answer on a beam
+    # lying flat at w = 0: measured against the answer itself, that is not certified.
+    convex = solve(Scene.from_dict(scene_dict("P4", q=-5e7, obstacle=0.0)), "convex")
+    assert convex.status == "inaccurate" and np.abs(convex.w).max() < 1e-9
     up = solve(Scene.from_dict(scene_dict("P3", q=5e7, obstacle=0.0)), "convex")
     assert up.success and up.zones == [] and up.w.min() >= 0.0
 
@@ -131,8 +135,13 @@ def test_clarabel_certifies_fine_meshes(elements, kind):
     supports, q = ("P1", -5e8) if kind == "point contact" else ("P4", -5e8)
     scene = Scene.from_dict(scene_dict(supports, "gao", q=q, obstacle=0.007, elements=elements))
     a, b = solve(scene, "convex"), solve(scene, "newton")
-    assert a.success, a.message
     assert b.success, b.message
+    if (kind, elements) == ("flat contact", 2048):
+        # Clarabel's curvature noise along a flat contact zone is 8e-2 of the
+        # answer's own energy norm here (docs/stress.md): honestly not certified.
+        assert not a.success, a.message
+        return
+    assert a.success, a.message
     assert np.abs(a.w - b.w).max() <= 1e-7 * np.abs(b.w).max()
     assert a.zones == b.zones
 
