@@ -530,7 +530,7 @@ def check_solve_arguments(scene, method=None, elements=None, solver=None) -> Sce
     SceneError
         Naming the argument (``scene``, ``method``, ``elements``, ``solver``)
         or the scene key; ``mesh.elements`` when the mesh would need more
-        memory than is available (:mod:`gaocvx.limits`).
+        memory than is available (:mod:`gaocvx.memory`).
 
     Examples
     --------
@@ -555,7 +555,7 @@ def check_solve_arguments(scene, method=None, elements=None, solver=None) -> Sce
     n = scene.mesh.elements
     if elements is not None:
         n = _whole("elements", elements, 1, MAX_ELEMENTS)
-    from .limits import check_memory
+    from .memory import check_memory
     chosen = method or scene.solve.method
     # Each point force may add a node: count them, the estimate is an upper bound.
     check_memory(n + len(scene.load.points), chosen, scene.contact, "mesh.elements", n)

@@ -121,10 +121,10 @@ def check_reference_elements(scene: Scene, elements, key: str = "reference_eleme
     """``elements`` as the size of a ground-truth mesh that fits, or SceneError naming ``key``.
 
     The allowed range is 1 to :data:`~gaocvx.scene.MAX_ELEMENTS`, and no more
-    than the largest mesh whose memory estimate (:mod:`gaocvx.limits`) fits in
+    than the largest mesh whose memory estimate (:mod:`gaocvx.memory`) fits in
     the memory available now.
     """
-    from .limits import available_memory, max_elements_that_fit
+    from .memory import available_memory, max_elements_that_fit
 
     upper, why = MAX_ELEMENTS, ""
     fit = max_elements_that_fit(reference_method(scene), scene.contact)

@@ -332,7 +332,7 @@ def test_evaluators_reject_non_numbers_and_nan(bad):
 
 # ------------------------------------------------------------------ memory
 def test_memory_estimate_and_refusal(monkeypatch, capsys, scene_file):
-    from gaocvx import limits
+    from gaocvx import memory as limits
     est = limits.estimate_memory
     assert est(1000, "newton", None) < est(2000, "newton", None) < est(2000, "convex", None)
     assert est(10_000, "cvm", "foundation") > 4 * est(5_000, "cvm", "foundation") / 3
