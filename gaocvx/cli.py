@@ -133,8 +133,13 @@ def _cmd_solve(args) -> int:
             record.update(result.to_dict())
             if not result.success:
                 code = EXIT_SOLVER
-                print(f"error: {path}: solve not certified optimal: {result.message}",
-                      file=sys.stderr)
+                verdict = result.extra.get("cvm", {}).get("verdict")
+                if result.status == "optimal" and verdict:
+                    # CVM solved its own problem; the verdict says why that is not enough.
+                    why = f"cvm answer not accepted: {verdict}"
+                else:
+                    why = f"solve not certified optimal: {result.message}"
+                print(f"error: {path}: {why}", file=sys.stderr)
             if args.plot:
                 from .plot import save_plot
                 save_plot(result, _plot_name(args.plot, path, len(args.scenes)), panels)

@@ -595,11 +595,20 @@ class MixedForm:
         return max(float(np.max(np.abs(w), initial=0.0)), self.zero_floor)
 
     def energy_norm(self, z, H) -> float:
-        """``sqrt(z' H z)`` of the mixed variables, H the energy's Hessian (an obstacle's penalty left out)."""
-        if H.obstacle is not None:
-            H = Hessian(self, H.gao, H.foundation)
-        z = self.absolute(z)
-        return math.sqrt(max(float(z @ (H @ z)), 0.0))
+        """The answer's own energy norm: ``z' H z`` with the foundation counted on its penetration.
+
+        H is the energy's Hessian (an obstacle's penalty left out).  Its
+        foundation part c on the active points would weigh the whole deflection,
+        c w^2, where the foundation stores only c (g - w)^2: on a very stiff
+        foundation with a gap that made the scale, and with it every relative
+        measure, far too large (a Newton answer 0.3-2.6 % wrong was certified).
+        """
+        base = Hessian(self, H.gao)
+        za = self.absolute(z)
+        norm2 = float(za @ (base @ za))
+        if H.foundation is not None:
+            norm2 += float(H.foundation @ self.depth(z) ** 2)
+        return math.sqrt(max(norm2, 0.0))
 
     def scale(self, z, H) -> float:
         """The size of the answer: its own energy norm; 1 without any load.
@@ -627,7 +636,9 @@ class MixedForm:
         H = self.hessian(z, **al) if H is None else H
         factor = self.kkt_factor(H) if factor is None else factor
         d, _ = factor.solve(-g, -self.link(z))
-        dec2 = max(float(d @ (H @ d)), 0.0)
+        dec2 = float(d @ (H @ d))
+        if dec2 < 0:  # numerically indefinite along d: no measure of anything
+            return math.inf, d
         return math.sqrt(dec2) / self.scale(z, H), d
 
 

@@ -203,7 +203,7 @@ def _newton(mf: MixedForm, z, tol, max_iter, al):
         g = mf.gradient(z, **al)
         H = mf.hessian(z, **al)
         d, mu = mf.kkt_solve(H, -g, -mf.link(z))
-        decrement = math.sqrt(max(float(d @ (H @ d)), 0.0)) / mf.scale(z, H)
+        decrement = _decrement(d, H, mf.scale(z, H))
         if decrement <= tol:
             return z, it - 1, "Newton decrement below tolerance"
         if dp.contact is not None:
@@ -217,6 +217,8 @@ def _newton(mf: MixedForm, z, tol, max_iter, al):
         # of the size of the constraint forces, and C d = -link(z) is round-off,
         # so near the answer g'd alone is that round-off times the forces and
         # the line search would stall long before the answer is.
+        if decrement == math.inf and float(g @ d) + float(mu @ (mf.C @ d)) > 0:
+            d = -d  # H numerically indefinite (P within round-off of P_bar_h): go downhill
         shift = float(mu @ (mf.C @ d))
         t = line_search(lambda s: float(mf.gradient(z + s * d, **al) @ d) + shift,
                         float(g @ d) + shift)
@@ -319,6 +321,11 @@ def certify(mf: MixedForm, z, lam=None) -> dict:
         return {"stationarity": 0.0}
     H = mf.hessian(z)
     out = {"stationarity": _stationarity(mf, z, lam, H)}
+    # w = 0 is admissible with energy 0 (g <= 0), so the minimum is <= 0: a
+    # positive energy beyond round-off is no minimiser, whatever else holds.
+    energy = sum(mf.energy_parts(z).values())
+    if energy > COMPLEMENTARITY_TOL * mf.scale(z, H) ** 2:
+        out["stationarity"] = math.inf
     if lam is not None:
         out.update(_obstacle_measures(mf, z, lam, mf.gap(z), H))
     return out
@@ -339,15 +346,29 @@ def _stationarity(mf: MixedForm, z, lam, H) -> float:
     rhs_z, rhs_c = -g, -mf.link(z)
     d, mu = factor.solve(rhs_z, rhs_c)
     scale = mf.scale(z, H)
-    decrement = math.sqrt(max(float(d @ (H @ d)), 0.0))
+    decrement = _decrement(d, H, scale) * scale
     check, _ = factor.solve(rhs_z - (H @ d + mf.C.T @ mu), rhs_c - mf.C @ d)
-    error = math.sqrt(max(float(check @ (H @ check)), 0.0))
+    error = math.sqrt(abs(float(check @ (H @ check))))
     # The step's own error must be small against the step, or against what the
     # certificate can notice (the stationarity tolerance): else the decrement
     # is no measure of anything.
     if not (error <= 0.1 * decrement or error <= 1e-3 * STATIONARITY_TOL * scale):
         return math.inf
     return decrement / scale
+
+
+def _decrement(d, H, scale) -> float:
+    """sqrt(d'Hd) / scale; infinite where H is numerically indefinite along d.
+
+    Near P_bar_h the computed H can have d'Hd < 0 along the buckling mode (at
+    w = 0 there is no Gao stiffness yet): the "Newton step" then goes uphill and
+    its decrement is no measure of anything.  Clipping d'Hd to 0 once certified
+    w = 0 as the minimiser.
+    """
+    curvature = float(d @ (H @ d))
+    if curvature < 0 and math.sqrt(-curvature) > 1e-3 * STATIONARITY_TOL * scale:
+        return math.inf
+    return math.sqrt(max(curvature, 0.0)) / scale
 
 
 def _obstacle_measures(mf: MixedForm, z, lam, gap, H) -> dict:

@@ -61,10 +61,10 @@ class Result:
     energy_parts : dict
         "bending", "gao", "axial", "load", "foundation" [J].
     zones : list of [x_first, x_last] or None
-        Contact zones (None without foundation or obstacle): the runs of
-        consecutive points in contact among the nodes and the Gauss points where
-        contact is integrated (foundation) or imposed (obstacle); ``[x, x]`` is
-        a point contact.
+        Contact zones (None without foundation or obstacle): runs of
+        consecutive nodes below a foundation's surface, or of consecutive
+        constraint points (nodes and Gauss points) touching an obstacle or
+        carrying its force; ``[x, x]`` is a point contact.
     reaction : ndarray or None
         Foundation reaction k_F (g - w)^+ [N/m] per node, or obstacle reaction
         force [N] per node (consistent nodal force of the constraint's
@@ -115,8 +115,8 @@ class Result:
         far above the beam's minimum energy (``extra["cvm"]["far_from_minimizer"]``,
         see :func:`gaocvx.solve.cvm_verdict`): that is no success.
         """
-        far = self.extra.get("cvm", {}).get("far_from_minimizer", False)
-        return self.status == "optimal" and not far
+        verdict = self.extra.get("cvm", {}).get("far_from_minimizer", False)
+        return self.status == "optimal" and verdict is False
 
     @property
     def fun(self) -> float:
@@ -249,6 +249,9 @@ class Result:
         if self.zones is not None:
             zones = ", ".join(f"[{a:.4g}, {b:.4g}]" for a, b in self.zones) or "none"
             lines.append(f"contact  {zones}")
-        if not self.success:
+        verdict = self.extra.get("cvm", {}).get("verdict")
+        if verdict:  # CVM's status is about its own problem; this is about the beam
+            lines.append(f"verdict  {verdict}")
+        if not self.success and not verdict:
             lines.append(f"note     {self.message}")
         return "\n".join(lines)

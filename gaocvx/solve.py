@@ -16,6 +16,7 @@ Examples
 from __future__ import annotations
 
 import logging
+import math
 import time
 
 import numpy as np
@@ -95,7 +96,7 @@ def solve(scene: Scene, method: str | None = None, *, elements: int | None = Non
         opts = scene.solve
         raw = solve_cvm(dp, opts.transform, opts.control, opts.minimizer, opts.bound)
         extra = {"cvm": cvm_verdict(dp, raw)}
-        if extra["cvm"]["far_from_minimizer"]:
+        if extra["cvm"]["far_from_minimizer"] is not False:
             raw = {**raw, "message": raw["message"] + "; " + extra["cvm"]["verdict"]}
             log.warning("%s", extra["cvm"]["verdict"])
     elif chosen in ("convex", "newton"):
@@ -130,12 +131,12 @@ def _solve_exact(dp: DiscreteProblem, method: str, solver: str = "clarabel",
         # An answer below the zero floor (a beam pressed onto an obstacle) is
         # measured in the floor's units, where the certificate measures it.
         size = raw["mixed"].deflection_size(raw["z"])
-        if 1.0 / RESCALE <= size <= RESCALE:
+        if not math.isfinite(size) or 1.0 / RESCALE <= size <= RESCALE:
             break
-        scaled = dp.rescaled(dp.W * size)
         try:
+            scaled = dp.rescaled(dp.W * size)
             again = run(scaled, raw.get("warm"))
-        except SolverError as exc:  # the first answer stands, with its own verdict
+        except (SolverError, ArithmeticError) as exc:  # the first answer stands, as certified
             log.info("re-solve in the answer's own scale failed: %s", exc)
             break
         if raw["status"] == "optimal" and again["status"] != "optimal":
@@ -152,7 +153,8 @@ def cvm_verdict(dp: DiscreteProblem, raw: dict) -> dict:
     here, by the energy gap against the ground truth (Newton, or the convex
     program when Newton is not certified).  A relative gap above CVM_FAR_GAP
     is "far from the minimiser": the result then says so, and is not a
-    success.
+    success; neither is an answer that no certified minimiser can be compared
+    with (``far_from_minimizer`` None).
     """
     info = {k: raw["cvm"][k] for k in ("transform", "control", "minimizer", "iterations",
                                        "control_bound_active", "bound", "bound_unit")}
@@ -164,9 +166,12 @@ def cvm_verdict(dp: DiscreteProblem, raw: dict) -> dict:
     size = max(abs(e_truth), sum(abs(v) for v in parts.values()) * truth_dp.E0) or 1.0
     gap = dp.energy(raw["u"]) * dp.E0 - e_truth
     rel = gap / size
-    far = truth["status"] == "optimal" and rel > CVM_FAR_GAP
+    # Without a certified minimiser nothing shows the answer is close to it: that
+    # is no success either (far_from_minimizer None).
+    far = rel > CVM_FAR_GAP if truth["status"] == "optimal" else None
     info.update(energy_gap=gap, energy_gap_rel=rel, ground_truth_status=truth["status"],
-                ground_truth_method=truth["solver"], far_from_minimizer=bool(far))
+                ground_truth_method=truth["solver"],
+                far_from_minimizer=None if far is None else bool(far))
     if truth["status"] != "optimal":
         info["verdict"] = "no certified minimiser to compare with: the energy gap is not certified"
     elif far:
