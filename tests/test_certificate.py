@@ -249,3 +249,22 @@ def test_very_stiff_foundation_is_not_certified_wrong():
         if r.success:
             assert r.energy == pytest.approx(_energy_of_reported(r), rel=1e-9)
     assert not (a.success and len(a.zones) > 2)
+
+
+def test_osqp_is_time_bounded(monkeypatch):
+    """OSQP's iterations cannot be interrupted from Python (a 3059-element scene ran 465 s):
+    every rung of its ladder has a time limit, and hitting it is a solver failure, not a hang."""
+    import time
+
+    import gaocvx.convex as convex
+    from gaocvx import SolverError
+
+    assert all(0 < rung["time_limit"] <= 60 for rung in convex.OSQP_LADDER)
+    monkeypatch.setattr(convex, "OSQP_LADDER",
+                        [dict(rung, time_limit=1e-4) for rung in convex.OSQP_LADDER])
+    scene = Scene.from_dict(scene_dict("P4", "euler-bernoulli", elements=1024, obstacle=0.003,
+                                       q=-5e8))
+    t0 = time.perf_counter()
+    with pytest.raises(SolverError):
+        solve(scene, "convex", solver="osqp")
+    assert time.perf_counter() - t0 < 30
