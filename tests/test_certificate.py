@@ -268,3 +268,11 @@ def test_osqp_is_time_bounded(monkeypatch):
     with pytest.raises(SolverError):
         solve(scene, "convex", solver="osqp")
     assert time.perf_counter() - t0 < 30
+
+
+def test_cvm_with_every_dof_fixed():
+    """One clamped-clamped element: CVM crashed ('NoneType' has no attribute 'solve')."""
+    data = scene_dict("P1", "euler-bernoulli", elements=1, foundation=(0.003, 1e8))
+    data["solve"] = {"method": "cvm"}
+    r = solve(Scene.from_dict(data))
+    assert r.success and not np.any(r.w) and r.extra["cvm"]["far_from_minimizer"] is False
