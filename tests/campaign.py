@@ -9,7 +9,9 @@ never a violation.  The rule checked is that **"optimal" means correct**:
 * ``w``: every answer called optimal agrees with the certified reference at the
   nodes and element midpoints (the Hermite interpolant):
   ``max |w - w_ref| <= TOL_W * max |w_ref| + floor``, floor =
-  ``max(1e-12 * gap, 1e-300)``;
+  ``max(1e-12 * gap, TOL_W * ZERO_ANSWER * W_linear)``: the absolute accuracy
+  gaocvx documents for answers below its zero floor (docs/model.md; the energy
+  gets that deflection times the total load, :func:`certified_floor`);
 * ``E``: ``|E - E_ref| <= TOL_E * max(|E_ref|, sum of |energy parts of the reference|)``;
 * ``energy``: the reported energy is the energy of the reported deflection,
   recomputed independently from (w, slope) with the same ``TOL_E``;
@@ -21,10 +23,13 @@ never a violation.  The rule checked is that **"optimal" means correct**:
 * ``crash``: no exception other than SceneError / SolverError.
 
 CVM may legitimately end far from the beam's minimiser (its thesis control
-space does not contain it on coarse meshes, issue 9 item 5): an optimal CVM
-answer that fails ``w``/``E`` is a violation only when gaocvx did not flag it
-(status not "optimal", a warning, or a CVM verdict in ``result.extra["cvm"]``
-saying it is far, see :func:`cvm_flagged`); flagged ones are counted.
+space does not contain it on coarse meshes, issue 9 item 5): the issue asks
+for a verdict from the energy gap.  An optimal CVM answer that fails
+``w``/``E`` is a violation only when gaocvx did not flag it (status not
+"optimal", a warning, or a CVM verdict in ``result.extra["cvm"]`` saying it is
+far, see :func:`cvm_flagged`) *and* its energy gap exceeds gaocvx's line for
+"far" (1 % of the energy scale with the P1 control, 1e-8 with the full
+control); flagged ones are counted.
 
 Why these tolerances
 --------------------
@@ -42,8 +47,9 @@ minimiser is second order in that error (``E - E* ~ 1/2 ||u - u*||_H^2 <=
 magnitude for the evaluation of the energy itself; the same holds for the
 energy of the reported deflection (evaluating an energy at a given point has
 no solver error at all).  The absolute floor lets a beam lying flat on an
-obstacle at ``gap`` be compared at the round-off of the gap; with ``gap = 0``
-the answer is exactly 0 and there is no floor.  P_bar_h is an eigenvalue
+obstacle at ``gap`` be compared at the round-off of the gap, and one pressed
+onto an obstacle (an answer under 1e-6 of the unsupported one) at the accuracy
+gaocvx documents for it.  P_bar_h is an eigenvalue
 computed to ~1e-15 by both; ``TOL_PBAR = 1e-8``.
 
 Examples
@@ -339,13 +345,34 @@ def _energy_scale(parts, E):
     return max(abs(E), sum(abs(v) for v in parts.values()))
 
 
-def _disagreement(w1, E1, w2, E2, scale_parts, gap):
-    """(relative w difference, relative E difference, w tolerance used) between two answers."""
+def certified_floor(scene) -> tuple[float, float]:
+    """The absolute accuracy gaocvx documents for answers below its zero floor [m, J].
+
+    docs/model.md: an answer smaller than ZERO_ANSWER (1e-6) of the unsupported
+    linear deflection W_linear is certified against that floor, i.e. to an
+    absolute TOL_W * ZERO_ANSWER * W_linear in w; its energy then to that
+    deflection times the total load.  W_linear is the documented, directly
+    checkable size of the linear unsupported answer (one banded solve), not an
+    output of the solvers under test.
+    """
+    from gaocvx.discrete import ZERO_ANSWER
+    dp = gaocvx.DiscreteProblem(scene, check_convexity=False)
+    w_floor = TOL_W * ZERO_ANSWER * dp.W_linear
+    load = scene.load
+    q = load.q if load.q is not None else 0.0
+    q_max = max(abs(v) for _, v in q) if load.is_table else abs(q)
+    total = scene.beam.load_factor * (q_max * scene.beam.length
+                                      + sum(abs(F) for _, F in load.points))
+    return w_floor, w_floor * total
+
+
+def _disagreement(w1, E1, w2, E2, scale_parts, gap, floors=(0.0, 0.0)):
+    """(w difference, E difference, w tolerance, E tolerance) between two answers."""
     size = max(np.max(np.abs(w2), initial=0.0), 0.0)
-    floor = max(1e-12 * (gap or 0.0), 1e-300)
+    floor = max(1e-12 * (gap or 0.0), floors[0], 1e-300)
     dw = float(np.max(np.abs(w1 - w2), initial=0.0))
     dE = abs(E1 - E2)
-    return dw, dE, TOL_W * size + floor, TOL_E * scale_parts
+    return dw, dE, TOL_W * size + floor, TOL_E * scale_parts + floors[1]
 
 
 def _independent_energy(scene, result):
@@ -445,6 +472,10 @@ def run_case(case: Case, methods=METHODS) -> dict:
 
 def _check(rec, scene, ref, results, gap):
     optimal = {m: r for m, (r, _) in results.items() if r.status == "optimal"}
+    try:
+        floors = certified_floor(scene)
+    except SceneError:
+        floors = (0.0, 0.0)
     viol = rec["violations"]
     refstat = rec["reference"]["status"]
     if refstat == "nonconvex":
@@ -483,7 +514,7 @@ def _check(rec, scene, ref, results, gap):
         w_ref = sample(ref.x, ref.w, ref.slope)
         w_m = _sampled(r, ref)
         dw, dE, tw, tE = _disagreement(w_m, r.energy, w_ref, ref.energy,
-                                       _energy_scale(ref.parts, ref.energy), gap)
+                                       _energy_scale(ref.parts, ref.energy), gap, floors)
         out["w_err"] = dw / max(ref.wmax, 1e-300)
         out["E_err"] = dE / max(tE / TOL_E, 1e-300)
         bad = [k for k, ok in (("w", dw <= tw), ("E", dE <= tE)) if not ok]
@@ -493,6 +524,19 @@ def _check(rec, scene, ref, results, gap):
             out["far_flagged"] = True
             far.add(m)
             continue
+        if m == "cvm":
+            # Issue 9, item 5: CVM's status describes its own discrete problem; the
+            # verdict on the beam comes from the energy gap (gaocvx.solve.cvm_verdict,
+            # 1 % with the thesis's P1 control, 1e-8 with the full control).  An
+            # unflagged answer is wrong only when its gap exceeds that line.
+            from gaocvx.solve import CVM_FAR_GAP, CVM_FULL_GAP
+            limit = CVM_FULL_GAP if scene.solve.control == "full" else CVM_FAR_GAP
+            gap_rel = (r.energy - ref.energy) / max(_energy_scale(ref.parts, ref.energy),
+                                                    1e-300)
+            out["energy_gap_rel"] = gap_rel
+            if gap_rel <= limit:
+                far.add(m)  # not at the minimiser, and its verdict says by how much
+                continue
         if m == "cvm":
             far.add(m)
         viol.append({"method": m, "check": "+".join(bad), "value": max(out["w_err"] / TOL_W,
@@ -513,8 +557,9 @@ def _check(rec, scene, ref, results, gap):
                         sum(abs(v) for v in rb.energy_parts.values()))
             dw = float(np.max(np.abs(wa - wb), initial=0.0))
             dE = abs(ra.energy - rb.energy)
-            tw = TOL_W * max(np.max(np.abs(wa)), np.max(np.abs(wb))) + max(1e-12 * gap, 1e-300)
-            tE = TOL_E * scale
+            tw = TOL_W * max(np.max(np.abs(wa)), np.max(np.abs(wb))) \
+                + max(1e-12 * gap, floors[0], 1e-300)
+            tE = TOL_E * scale + floors[1]
             if dw > tw or dE > tE:
                 viol.append({"method": f"{a}~{bname}", "check": "pair",
                              "value": max(dw / max(tw, 1e-300), dE / max(tE, 1e-300)),
