@@ -200,10 +200,13 @@ def shape_functions(t, h, deriv: int = 0) -> np.ndarray:
     t = np.asarray(t, float)
     h = np.broadcast_to(np.asarray(h, float), t.shape)
     one = np.ones_like(t)
+    # Factored forms: expanded, 1 - 3t^2 + 2t^3 near t = 1 (a point force 1e-9 h
+    # from a node) cancels to round-off of its size, ~eps / (1 - t)^2 relative.
+    s = 1 - t
     if deriv == 0:
-        v = [1 - 3 * t**2 + 2 * t**3, h * (t - 2 * t**2 + t**3), 3 * t**2 - 2 * t**3, h * (-t**2 + t**3)]
+        v = [s**2 * (1 + 2 * t), h * t * s**2, t**2 * (3 - 2 * t), -h * t**2 * s]
     elif deriv == 1:
-        v = [(-6 * t + 6 * t**2) / h, 1 - 4 * t + 3 * t**2, (6 * t - 6 * t**2) / h, -2 * t + 3 * t**2]
+        v = [-6 * t * s / h, s * (1 - 3 * t), 6 * t * s / h, t * (3 * t - 2)]
     elif deriv == 2:
         v = [(-6 + 12 * t) / h**2, (-4 + 6 * t) / h, (6 - 12 * t) / h**2, (-2 + 6 * t) / h]
     elif deriv == 3:
