@@ -94,7 +94,12 @@ def test_newton_obstacle_matches_convex(supports, model, kind):
     # (Loads here are >= 5e7 N in total: 1e3 N is far below any real reaction.)
     rscale = max(np.abs(b.reaction).max(), 1e3)
     assert np.abs(a.reaction[inner] - b.reaction[inner]).max() <= 1e-4 * rscale
-    assert a.zones == b.zones
+    # Zones are runs of constraint points (nodes and Gauss points) touching within
+    # 1e-6 of the answer's size: a grazing point next to a zone can fall either side
+    # of that band in two certified answers, so ends may differ by a point spacing.
+    assert len(a.zones) == len(b.zones)
+    h = 1.0 / 16
+    assert all(abs(p - q) <= 0.5 * h for za, zb in zip(a.zones, b.zones) for p, q in zip(za, zb))
 
 
 @pytest.mark.parametrize("method", ["newton", "convex"])
