@@ -35,7 +35,7 @@ def table(records, command, elapsed, code) -> str:
            "reference `tests/independent.py` (a separate Hermite formulation and solvers, "
            "certified to round-off in the answer's own scale).  The rule: an answer called "
            f"`optimal` agrees with the reference to {TOL_W:g} of max |w| (nodes and element "
-           f"midpoints; floor 1e-12 * gap) and {TOL_E:g} of the energy scale, its energy is the "
+           f"midpoints; floor: 1e-12 * gap, or the documented accuracy of answers below the zero floor) and {TOL_E:g} of the energy scale, its energy is the "
            "energy of its deflection, and no two optimal answers disagree.  Why these "
            "tolerances: see the docstring of `tests/campaign.py`.", "",
            "## Reference", "",
