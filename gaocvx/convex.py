@@ -314,7 +314,7 @@ def solve_convex(dp: DiscreteProblem, solver: str = "clarabel", verbose: bool = 
         # under compression), so the solver is not called.  "No load" is a load
         # vector that is exactly zero, never a quadratic form that rounds to zero.
         z = np.zeros(mf.n)
-        lam = None if dp.contact != "obstacle" else np.zeros(mf.A.shape[0])
+        lam = mf.no_contact_forces()
         return answer(mf, z, lam, certify(mf, z, lam),
                       "no load: w = 0 is the exact minimiser (every energy term is >= 0 and "
                       "vanishes there); the solver was not called", 0, solver, t0, reused=False)
@@ -324,7 +324,7 @@ def solve_convex(dp: DiscreteProblem, solver: str = "clarabel", verbose: bool = 
         # the problem with the contact (numbers of the size of a far gap in the
         # program's constraints would make Clarabel fail).
         free = solve_convex(dp.without_contact(), solver, verbose, reuse)
-        lam = None if dp.contact != "obstacle" else np.zeros(mf.A.shape[0])
+        lam = mf.no_contact_forces()
         z = mf.on_manifold(free["z"])
         return answer(mf, z, lam, certify(mf, z, lam),
                       free["message"] + f"; the {dp.contact} is out of the beam's reach",

@@ -35,9 +35,7 @@ import functools
 import math
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from . import fem
 from .errors import SceneError

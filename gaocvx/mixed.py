@@ -582,12 +582,17 @@ class MixedForm:
         """Deflection below which an answer counts as zero (non-dimensional).
 
         A fraction ZERO_ANSWER of the unsupported linear answer's size: only a
-        beam pressed onto an obstacle at gap 0 has an answer that small, and
-        relative measures of it would compare round-off with round-off.
+        beam pressed onto an obstacle (lying flat on it, or a very flexible beam
+        on a very close one) has an answer that small, and relative measures of
+        it would compare round-off with round-off.
         """
         if not self.has_load:
             return 1.0  # the answer is w = 0 exactly; any unit serves
         return ZERO_ANSWER * self.dp.W_linear / self.dp.W
+
+    def no_contact_forces(self) -> np.ndarray | None:
+        """Obstacle multipliers that are all zero (None without an obstacle)."""
+        return np.zeros(self.A.shape[0]) if self.dp.contact == "obstacle" else None
 
     def deflection_size(self, z) -> float:
         """The answer's own size: its largest nodal |w| (non-dimensional), at least :attr:`zero_floor`."""
@@ -623,23 +628,6 @@ class MixedForm:
         if not self.has_load:
             return 1.0
         return max(self.energy_norm(z, H), self.zero_floor) or 1.0
-
-    def decrement(self, z, H=None, g=None, factor=None, **al) -> tuple[float, np.ndarray]:
-        """Relative Newton decrement on the constraint manifold, and the Newton step.
-
-        The scale is the answer's own energy norm (:meth:`scale`); inside the
-        method of multipliers (``al`` given) the penalty's part of H is left out
-        of it, as rho ||A z||^2 is no measure of the answer's size.  ``factor``
-        is a KKT factor of H to reuse.
-        """
-        g = self.gradient(z, **al) if g is None else g
-        H = self.hessian(z, **al) if H is None else H
-        factor = self.kkt_factor(H) if factor is None else factor
-        d, _ = factor.solve(-g, -self.link(z))
-        dec2 = float(d @ (H @ d))
-        if dec2 < 0:  # numerically indefinite along d: no measure of anything
-            return math.inf, d
-        return math.sqrt(dec2) / self.scale(z, H), d
 
 
 class _KKTFactor:

@@ -75,33 +75,32 @@ def solve_newton(dp: DiscreteProblem, warm: dict | None = None, tol: float = TOL
     """
     t0 = time.perf_counter()
     warm = _rescaled_warm(warm, dp)
-    if dp.contact is not None and MixedForm(dp).contact_out_of_reach:
+    mf = MixedForm(dp)
+    if dp.contact is not None and mf.contact_out_of_reach:
         # The foundation or obstacle lies provably below anything the beam can
         # reach: it costs nothing, so the contact-free problem is solved (an
         # obstacle's origin 1e15 m away would turn every w - g into round-off)
         # and its answer certified on the problem with the contact.
         free = solve_newton(dp.without_contact(), warm, tol, max_iter)
-        mf = MixedForm(dp)
-        lam = np.zeros(mf.A.shape[0]) if dp.contact == "obstacle" else None
-        return _finish(mf, free["z"], lam, free["nit"], t0,
+        return _finish(mf, free["z"], mf.no_contact_forces(), free["nit"], t0,
                        free["message"].removeprefix("newton: ")
                        + f"; the {dp.contact} is out of the beam's reach")
-    mf = MixedForm.on_obstacle(dp) if dp.contact == "obstacle" else MixedForm(dp)
+    if dp.contact == "obstacle":
+        mf = MixedForm.on_obstacle(dp)
     z = -mf.origin  # the undeformed beam
     if warm is not None and len(warm.get("z", ())) == mf.n:
         z = np.array(warm["z"], float) - mf.origin
     if dp.n == 0 or not mf.has_load:
         # No free DOF, or no load: every energy term is >= 0 below P_bar_h and
         # vanishes at w = 0, which is admissible (g <= 0): the exact minimiser.
-        lam = np.zeros(mf.A.shape[0]) if dp.contact == "obstacle" else None
         note = "no free degrees of freedom" if dp.n == 0 else "no load"
-        return _finish(mf, -mf.origin, lam, 0, t0, f"{note}: w = 0")
+        return _finish(mf, -mf.origin, mf.no_contact_forces(), 0, t0, f"{note}: w = 0")
     if dp.contact != "obstacle":
         z, nit, note = _newton(mf, z, tol, max_iter, {})
         return _finish(mf, z, None, nit, t0, note)
 
     # Method of multipliers for A z >= g.
-    lam = np.zeros(mf.A.shape[0])
+    lam = mf.no_contact_forces()
     if warm is not None and warm.get("lam") is not None and len(warm["lam"]) == len(lam):
         lam = np.array(warm["lam"], float)
     rho, rho_max = _penalty(mf)
