@@ -88,10 +88,11 @@ def _json_default(value):
 
 
 def _dumps(obj) -> str:
-    # JSON has no inf/nan; an honest null is better than invalid JSON.
+    # JSON has no inf/nan; an honest null is better than invalid JSON.  A -0.0
+    # (round-off's sign of a zero) is written 0.0: it reads as a sign that is not there.
     def clean(v):
-        if isinstance(v, float) and not math.isfinite(v):
-            return None
+        if isinstance(v, float):
+            return v + 0.0 if math.isfinite(v) else None
         if isinstance(v, dict):
             return {k: clean(x) for k, x in v.items()}
         if isinstance(v, (list, tuple)):
@@ -129,6 +130,9 @@ def _cmd_solve(args) -> int:
         record, code = {"scene": path}, EXIT_OK
         try:
             scene = load_scene(path, overrides)
+            log.info("%s: solving (%s, supports %s, %d elements, method %s)", path,
+                     scene.beam.model, scene.beam.supports, scene.mesh.elements,
+                     scene.solve.method)
             result = solve(scene)
             record.update(result.to_dict())
             if not result.success:
@@ -142,7 +146,9 @@ def _cmd_solve(args) -> int:
                 print(f"error: {path}: {why}", file=sys.stderr)
             if args.plot:
                 from .plot import save_plot
-                save_plot(result, _plot_name(args.plot, path, len(args.scenes)), panels)
+                name = _plot_name(args.plot, path, len(args.scenes))
+                save_plot(result, name, panels)
+                log.info("%s: picture written to %s", path, name)
         except SceneError as exc:
             code = EXIT_INPUT
             record.update(status="error", error=str(exc))
@@ -415,6 +421,9 @@ def _build_parser() -> argparse.ArgumentParser:
     p.add_argument("which", choices=["thesis"], help="the report to make")
     p.add_argument("--output", metavar="FILE", help="write Markdown here instead of stdout")
     p.set_defaults(func=_cmd_report)
+    for p in sub.choices.values():  # -v after the subcommand too; counts add up
+        p.add_argument("-v", "--verbose", dest="verbose_after", action="count", default=0,
+                       help="log phases and progress to stderr (-vv for debug)")
     return parser
 
 
@@ -435,7 +444,8 @@ def main(argv=None) -> int:
     except SceneError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_INPUT
-    logging.basicConfig(level=[logging.WARNING, logging.INFO, logging.DEBUG][min(args.verbose, 2)],
+    verbose = args.verbose + getattr(args, "verbose_after", 0)
+    logging.basicConfig(level=[logging.WARNING, logging.INFO, logging.DEBUG][min(verbose, 2)],
                         format="%(levelname)s %(name)s: %(message)s")
     if args.version:
         from . import __version__

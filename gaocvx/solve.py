@@ -205,6 +205,8 @@ def cvm_verdict(dp: DiscreteProblem, raw: dict) -> dict:
 def make_result(dp: DiscreteProblem, raw: dict, method: str, elapsed: float,
                 extra: dict | None = None) -> Result:
     """Turn a solver's raw output on ``dp`` into a :class:`Result` in physical units."""
+    log.info("%s: %s (%s, %s iterations, %.1f ms, %d elements)", method, raw["status"],
+             raw.get("solver"), raw.get("nit"), elapsed * 1e3, dp.n_nodes - 1)
     u = raw["u"]
     w, slope = dp.to_physical(u)
     # Energies from the better-conditioned mixed variables when the solver has them.

@@ -22,6 +22,7 @@ True
 
 from __future__ import annotations
 
+import decimal
 import logging
 import math
 import sys
@@ -45,10 +46,18 @@ LOAD_SCALE = "load.scale"
 def parse_range(text: str, key: str = "--vary") -> np.ndarray:
     """Values of ``START:STOP:NUM[:log]`` (NUM >= 1; log spacing needs START, STOP > 0).
 
+    The grid is computed in decimal arithmetic from the endpoints as written
+    (40 digits) and each value rounded once to a double: a value that is a
+    decimal number comes out as exactly the double one would type (0.8, not
+    the 0.7999999999999999 of ``numpy.linspace(0, 1.6, 3)``), and log grids
+    over whole decades give the powers of ten.
+
     Examples
     --------
     >>> parse_range("0:1:3").tolist()
     [0.0, 0.5, 1.0]
+    >>> parse_range("0:1.6:5").tolist()
+    [0.0, 0.4, 0.8, 1.2, 1.6]
     >>> parse_range("1e8:1e10:3:log").tolist()
     [100000000.0, 1000000000.0, 10000000000.0]
     """
@@ -65,11 +74,31 @@ def parse_range(text: str, key: str = "--vary") -> np.ndarray:
         raise SceneError(key, "START and STOP must be finite", text)
     if not 1 <= num <= 100_000:
         raise SceneError(key, "NUM must be between 1 and 100000", text)
-    if len(parts) == 4:
-        if start <= 0 or stop <= 0:
-            raise SceneError(key, "a log range needs START > 0 and STOP > 0", text)
-        return np.geomspace(start, stop, num)
-    return np.linspace(start, stop, num)
+    if len(parts) == 4 and (start <= 0 or stop <= 0):
+        raise SceneError(key, "a log range needs START > 0 and STOP > 0", text)
+    return _decimal_grid(parts[0], parts[1], num, log=len(parts) == 4)
+
+
+def _decimal_grid(start: str, stop: str, num: int, log: bool) -> np.ndarray:
+    """``num`` values from ``start`` to ``stop`` (decimal strings), evenly or log spaced.
+
+    Every value is start + i (stop - start) / (num - 1), or start (stop /
+    start)^(i / (num - 1)), computed with 40 significant digits and rounded once
+    to the nearest double; the endpoints are the numbers as written.
+    """
+    with decimal.localcontext() as ctx:
+        ctx.prec = 40
+        a, b = decimal.Decimal(start.strip()), decimal.Decimal(stop.strip())
+        if num == 1:
+            return np.array([float(a)])
+        if log:
+            ratio = b / a
+            values = [a * ratio ** (decimal.Decimal(i) / (num - 1)) for i in range(num)]
+        else:
+            step = (b - a) / (num - 1)
+            values = [a + i * step for i in range(num)]
+        values[0], values[-1] = a, b
+        return np.array([float(v) for v in values])
 
 
 def scene_at(scene: Scene, key: str, value: float) -> Scene:
@@ -168,7 +197,13 @@ def sweep(scene: Scene, key: str, values, method: str | None = None, jobs: int =
         mapped = (_dask_map(dask, scene, key, blocks, method) if dask is not None
                   else _process_map(jobs, scene, key, blocks, method))
         stream = (item for block in mapped for item in block)
+    t0 = time.perf_counter()
     for done, item in enumerate(stream, start=1):
+        value, outcome = item
+        what = (f"error: {outcome}" if isinstance(outcome, Exception)
+                else f"{outcome.status} ({outcome.method}, {outcome.time_s * 1e3:.1f} ms)")
+        log.info("sweep %s = %.6g: %s [%d/%d, %.1f s]", key, value, what, done, total,
+                 time.perf_counter() - t0)
         if progress:
             progress(done, total)
         yield item
@@ -218,13 +253,22 @@ def summary_row(value: float, item) -> dict:
 
 
 class ProgressBar:
-    """A one-line progress bar on a stream (stderr by default)."""
+    """A one-line progress bar on a terminal (stderr by default).
+
+    It redraws itself with carriage returns, which only a terminal shows as
+    one line: on a redirected stream (a file, a pipe, a test's capture) it
+    writes nothing, and ``-v`` logs one line per value instead.
+    """
 
     def __init__(self, label: str, stream=None, width: int = 30):
         self.label, self.stream, self.width = label, stream or sys.stderr, width
         self.t0 = time.perf_counter()
+        isatty = getattr(self.stream, "isatty", None)
+        self.enabled = bool(isatty and isatty())
 
     def __call__(self, done: int, total: int) -> None:
+        if not self.enabled:
+            return
         filled = int(self.width * done / max(total, 1))
         bar = "#" * filled + "-" * (self.width - filled)
         elapsed = time.perf_counter() - self.t0

@@ -1,7 +1,9 @@
 """Plots, the EB-vs-Gao comparison and sweeps, from Python and the command line."""
 
 import csv
+import io
 import json
+import logging
 
 import matplotlib
 import numpy as np
@@ -13,7 +15,7 @@ from conftest import FOUNDATION_TOML, scene_dict  # noqa: E402
 from gaocvx import Scene, SceneError, solve  # noqa: E402
 from gaocvx.cli import main  # noqa: E402
 from gaocvx.plot import plot  # noqa: E402
-from gaocvx.sweep import parse_range, sweep  # noqa: E402
+from gaocvx.sweep import ProgressBar, parse_range, sweep  # noqa: E402
 
 SCENE = FOUNDATION_TOML + "[mesh]\nelements = 16\n"
 
@@ -75,7 +77,7 @@ def test_sweep_penetration_falls_as_stiffness_rises(tmp_path, scene_file, capsys
     assert all(r["status"] == "optimal" and r["key"] == "foundation.stiffness" for r in lines)
     depth = [-0.007 - r["min"]["w"] for r in lines]
     assert all(a > b for a, b in zip(depth, depth[1:])) and depth[-1] > 0
-    assert "sweep foundation.stiffness" in err and "8/8" in err   # the progress bar
+    assert "\r" not in err   # stderr is no terminal here: no progress-bar frames
     rows = list(csv.DictReader(csv_path.open()))
     assert len(rows) == 8 and float(rows[0]["penetration"]) == pytest.approx(depth[0])
     assert (tmp_path / "s.png").exists()
@@ -162,3 +164,65 @@ def test_plot_without_matplotlib_is_a_clear_error(tmp_path, scene_file, capsys, 
     assert main(["solve", str(scene_file), "--plot", str(tmp_path / "a.png")]) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: --plot: pictures need matplotlib") and "Traceback" not in err
+
+
+class _Terminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def test_progress_bar_only_on_a_terminal():
+    """A redirected stream gets no carriage-return frames; a terminal gets one line, redrawn."""
+    redirected, terminal = io.StringIO(), _Terminal()
+    for stream in (redirected, terminal):
+        bar = ProgressBar("sweep k", stream)
+        for done in (1, 2, 3):
+            bar(done, 3)
+    assert redirected.getvalue() == ""
+    frames = terminal.getvalue()
+    assert frames.count("\r") == 3 and frames.endswith("\n") and "3/3" in frames
+
+
+def test_verbose_logs_phases_and_sweep_progress(scene_file, capsys, caplog):
+    """-v before or after the subcommand logs what is done (INFO); without it, nothing."""
+    with caplog.at_level(logging.WARNING):
+        assert main(["solve", str(scene_file)]) == 0
+    assert not [r for r in caplog.records if r.levelno < logging.WARNING]
+    caplog.clear()
+    for argv in (["-v", "solve", str(scene_file)], ["solve", str(scene_file), "-v"]):
+        with caplog.at_level(logging.INFO):
+            assert main(argv) == 0, argv
+        text = caplog.text
+        assert "solving (gao, supports P1, 16 elements" in text, argv
+        assert "newton: optimal" in text, argv
+        caplog.clear()
+    with caplog.at_level(logging.INFO):
+        assert main(["sweep", str(scene_file), "--vary", "foundation.gap=0:0.01:3", "-v"]) == 0
+    progress = [r.getMessage() for r in caplog.records if r.getMessage().startswith("sweep ")]
+    assert [m.split("[")[1].split(",")[0] for m in progress] == ["1/3", "2/3", "3/3"]
+
+
+def test_verbose_after_the_subcommand_is_accepted(scene_file, capsys):
+    assert main(["solve", str(scene_file), "-vv"]) == 0
+    assert main(["sweep", str(scene_file), "--vary", "foundation.gap=0:0.01:2", "-v"]) == 0
+    assert main(["compare", str(scene_file), "--verbose"]) == 0
+
+
+@pytest.mark.parametrize("spec, expected", [
+    ("0:1.6:5", [0.0, 0.4, 0.8, 1.2, 1.6]),
+    ("0:1:6", [0.0, 0.2, 0.4, 0.6, 0.8, 1.0]),
+    ("0.1:0.3:3", [0.1, 0.2, 0.3]),
+    ("-1e9:1e9:5", [-1e9, -5e8, 0.0, 5e8, 1e9]),
+    ("1e8:1e12:5:log", [1e8, 1e9, 1e10, 1e11, 1e12]),
+    ("1:100:3:log", [1.0, 10.0, 100.0]),
+    ("0:1:3", [0.0, 0.5, 1.0]),
+])
+def test_sweep_values_are_the_exact_grid(spec, expected):
+    """Each value is the double nearest the exact grid point (the literal one would type)."""
+    assert parse_range(spec).tolist() == expected
+
+
+def test_sweep_json_values_without_float_noise(scene_file, capsys):
+    assert main(["sweep", str(scene_file), "--vary", "load.scale=0:1.6:5", "--json"]) == 0
+    values = [json.loads(line)["value"] for line in capsys.readouterr().out.splitlines()]
+    assert values == [0.0, 0.4, 0.8, 1.2, 1.6]
