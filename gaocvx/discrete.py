@@ -188,8 +188,13 @@ class DiscreteProblem:
             q = [(xk / L, qk) for xk, qk in q]
         f_unit = fem.load_vector(self.xi, q) * (lf * L**4 / EI)
         if scene.load.points:
-            pts = [(xk / L, Fk * lf * L**3 / EI) for xk, Fk in scene.load.points]
-            f_unit = f_unit + fem.point_load_vector(self.xi, pts)
+            # In physical x: xk / L rounds a point 1e-9 L from a node to an
+            # absolute eps, a relative 1e-7 of its distance to the node, which
+            # is what a force there acts through.  Slope DOFs then carry h = L dxi.
+            pts = [(xk, Fk * lf * L**3 / EI) for xk, Fk in scene.load.points]
+            f_pts = fem.point_load_vector(self.x, pts)
+            f_pts[1::2] /= L
+            f_unit = f_unit + f_pts
         f_unit = f_unit[fr]
         # The load as a function of xi (piecewise-linear table, knots in xi) and the
         # point forces, per unit W: the transformed loads of CVM integrate these.

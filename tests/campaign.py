@@ -37,11 +37,11 @@ The reference certifies itself (relative Newton decrement, nodal Newton
 correction <= 1e-9 in the answer's own scale, typically 1e-14; nodally exact
 against closed forms to ~1e-13 up to 2048 elements), so the
 comparison measures gaocvx's error alone.  gaocvx calls an answer optimal when
-its relative energy-norm residual is <= 1e-6 (``STATIONARITY_TOL``); for a
-strictly convex energy the energy-norm error is then <= ~1e-6 of the
-answer's energy norm, and the nodal deflection (a bounded functional of the
-energy norm for a beam, with a constant of order one for the loads drawn here)
-is wrong by at most ~1e-6 of its size: ``TOL_W = 1e-6``.  The energy of a
+its relative energy-norm residual, the largest nodal deflection of its Newton
+step (its first-order error) and its nodal change under a round-off change of
+the axial force are all <= 1e-6 (``STATIONARITY_TOL``) of the answer: its
+nodal deflection is wrong by at most ~1e-6 of its size, ``TOL_W = 1e-6``, and
+two optimal answers differ by at most twice that (the pair rule).  The energy of a
 minimiser is second order in that error (``E - E* ~ 1/2 ||u - u*||_H^2 <=
 5e-13`` of the energy scale), so ``TOL_E = 1e-8`` leaves four orders of
 magnitude for the evaluation of the energy itself; the same holds for the
@@ -544,8 +544,11 @@ def _check(rec, scene, ref, results, gap):
                      "detail": f"w_err {out['w_err']:.3g} (tol {TOL_W:g} + floor), E_err "
                                f"{out['E_err']:.3g} (tol {TOL_E:g}); min w {r.w.min():.9g} vs "
                                f"{ref.w.min():.9g}, E {r.energy:.10g} vs {ref.energy:.10g}"})
-    # no two methods both optimal and disagreeing (needs no reference)
-    names = [m for m in optimal if m not in far and not rec["methods"][m].get("flagged")]
+    # no two methods both optimal and disagreeing (needs no reference); a CVM
+    # answer is judged by its verdict (above), or without a reference not at
+    # all: its status describes its own discrete problem, not the beam's.
+    names = [m for m in optimal if m not in far and not rec["methods"][m].get("flagged")
+             and not (m == "cvm" and ref is None)]
     for i, a in enumerate(names):
         for bname in names[i + 1:]:
             ra, rb = optimal[a], optimal[bname]
@@ -557,7 +560,8 @@ def _check(rec, scene, ref, results, gap):
                         sum(abs(v) for v in rb.energy_parts.values()))
             dw = float(np.max(np.abs(wa - wb), initial=0.0))
             dE = abs(ra.energy - rb.energy)
-            tw = TOL_W * max(np.max(np.abs(wa)), np.max(np.abs(wb))) \
+            # each within TOL_W of the truth: within 2 TOL_W of each other
+            tw = 2 * TOL_W * max(np.max(np.abs(wa)), np.max(np.abs(wb))) \
                 + max(1e-12 * gap, floors[0], 1e-300)
             tE = TOL_E * scale + floors[1]
             if dw > tw or dE > tE:

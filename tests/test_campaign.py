@@ -222,6 +222,26 @@ def test_campaign_large(request):
     assert s["violations"] == 0, "\n".join(bad[:12])
 
 
+@pytest.mark.parametrize("index", [
+    661, 885,    # EB 1e-9 below P_bar_h: CVM's flat-energy answer, data round-off
+    729,         # a point force 1.9e-9 m from a pinned end
+    334,         # a Gao beam stiffened by its own slopes: convex 2.5e-5 off at its nodes
+    pytest.param(459, marks=pytest.mark.xfail(strict=True, reason=(
+        "known limit: an interior-point answer lying flat on an obstacle with zero "
+        "contact force lifts off by ~sqrt of its tolerance (1.4e-6 of its size), "
+        "where the energy changes by 1e-13 (docs/campaign.md)"))),
+])
+def test_campaign_seed1_regressions(index):
+    """Scenes of the large campaign (seed 1) that had violations, each a rule broken."""
+    from campaign import random_scene, run_case
+    case = random_scene(np.random.default_rng([SLOW_SEED, index]), slow=True)
+    case.id = f"{SLOW_SEED}:{index}"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rec = run_case(case)
+    assert not rec["violations"], rec["violations"]
+
+
 def test_campaign_checks_catch_a_wrong_answer():
     """The checks themselves: a result moved by 1e-5 of its size is a violation."""
     import sys
