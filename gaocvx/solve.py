@@ -149,6 +149,9 @@ def _solve_exact(dp: DiscreteProblem, method: str, solver: str = "clarabel",
             break
         if raw["status"] == "optimal" and again["status"] != "optimal":
             break
+        # Iterations count every pass: the first one's are work done too.
+        if raw.get("nit") is not None and again.get("nit") is not None:
+            again = {**again, "nit": raw["nit"] + again["nit"]}
         dp, raw = scaled, again
     return dp, raw
 
