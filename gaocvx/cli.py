@@ -327,17 +327,18 @@ def _cmd_sweep(args) -> int:
                       else {"value": value, "key": key, **item.to_dict()})
             print(_dumps(record), flush=True)
     if not args.json:
-        head = f"{key:>22s} {'status':10s} {'min w [m]':>12s} {'at x':>7s} {'energy [J]':>12s} {'contact [m]':>11s}"
+        head = (f"{key:>22s} {'status':10s} {'min w [m]':>12s} {'at x':>7s} {'energy [J]':>12s} "
+                f"{'contact [m]':>11s} {'zones':>5s}")
         print(head)
         for r in rows:
             if r["status"] == "error":
                 print(f"{r['value']:22.6g} error      {r['error']}")
             else:
                 print(f"{r['value']:22.6g} {r['status']:10s} {r['min_w']:12.6g} {r['min_x']:7.4g} "
-                      f"{r['energy']:12.6g} {r['contact_length']:11.4g}")
+                      f"{r['energy']:12.6g} {r['contact_length']:11.4g} {r['contact_zones']:5d}")
     if args.csv:
         fields = ["value", "status", "method", "min_w", "min_x", "max_w", "max_x", "energy",
-                  "contact_length", "penetration", "time_s", "error"]
+                  "contact_length", "contact_zones", "penetration", "time_s", "error"]
         with open(args.csv, "w", newline="") as fh:
             writer = csvmod.DictWriter(fh, fieldnames=fields, extrasaction="ignore")
             writer.writeheader()
@@ -356,8 +357,9 @@ def _cmd_sweep(args) -> int:
             ob = solve(Scene.from_dict(data))
             reference = {"label": "rigid obstacle (k_F -> inf)", "energy": ob.energy,
                          "max_abs_w": max(abs(ob.min["w"]), abs(ob.max["w"])),
-                         "contact_length": float(sum(b - a for a, b in ob.zones or []))}
-        save_sweep_plot(rows, key, args.plot, reference, log=spec.endswith(":log"))
+                         "contact_length": float(sum(b - a for a, b in ob.zones or [])),
+                         "contact_zones": len(ob.zones or [])}
+        save_sweep_plot(rows, key, args.plot, reference, log=spec.endswith(":log"), scene=scene)
     return worst
 
 

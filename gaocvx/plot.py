@@ -1,7 +1,9 @@
 """Pictures of results, comparisons and sweeps (matplotlib, imported only here).
 
-:func:`plot` draws one result on an Axes and returns it; nothing here calls
-``show()``.  :func:`save_plot`, :func:`save_compare_plot` and
+:func:`plot` draws the deflection of one result on an Axes and returns it;
+:func:`plot_loads` draws what acts on the beam (the distributed load's
+profile, point forces, the axial force, the support reactions).  Nothing here
+calls ``show()``.  :func:`save_plot`, :func:`save_compare_plot` and
 :func:`save_sweep_plot` write files (PNG or SVG by suffix) for the command line.
 
 Examples
@@ -9,11 +11,14 @@ Examples
 >>> import matplotlib
 >>> matplotlib.use("Agg")
 >>> from gaocvx import Scene, solve
->>> scene = Scene.from_dict({"beam": {"supports": "P3", "length": 1.0, "E": 2.1e11,
-...     "nu": 0.3, "half_thickness": 0.1, "width": 1.0}, "load": {"q": -5e7}})
+>>> scene = Scene.from_dict({"beam": {"model": "euler-bernoulli", "supports": "P3",
+...     "length": 1.0, "E": 2.1e11, "half_thickness": 0.1, "width": 1.0},
+...     "load": {"q": -5e7}})
 >>> ax = plot(solve(scene))
 >>> ax.get_xlabel()
 'x [m]'
+>>> [t.get_text() for t in ax.figure.axes[0].texts if t.get_text()]   # -q L, -q L^2 / 2
+['R = 5e+07 N', 'M = 2.5e+07 N m ↺']
 """
 
 from __future__ import annotations
@@ -24,10 +29,25 @@ import numpy as np
 
 from .errors import SceneError
 
-__all__ = ["plot", "save_plot", "save_compare_plot", "save_sweep_plot", "PANELS"]
+__all__ = ["plot", "plot_loads", "result_figure", "compare_figure", "sweep_figure", "save_plot",
+           "save_compare_plot", "save_sweep_plot", "PANELS", "UNITS"]
 
 PANELS = ("slope", "moment", "shear", "reaction")
 _SUFFIXES = (".png", ".svg")
+DEFAULT_METHOD = "newton"   # what "auto" solves with; other methods are named on the plot
+# More point forces than this are drawn as plain lines, without a value each.
+MAX_LABELLED_FORCES = 12
+
+# The unit of each scene key a sweep may vary (the x-axis label).
+UNITS = {
+    "beam.length": "m", "beam.E": "Pa", "beam.nu": "-", "beam.half_thickness": "m",
+    "beam.width": "m", "beam.EI": "N m^2", "beam.E_alpha": "N", "beam.mu": "-",
+    "load.q": "N/m", "load.axial": "N", "load.scale": "-",
+    "foundation.gap": "m", "foundation.stiffness": "N/m^2", "obstacle.gap": "m",
+}
+
+_SUPPORT_KINDS = {"P1": ("clamped", "clamped"), "P2": ("clamped", "pinned"),
+                  "P3": ("clamped", "free"), "P4": ("pinned", "pinned")}
 
 
 def _pyplot():
@@ -57,11 +77,19 @@ def _check_file(path) -> Path:
     return path
 
 
+def _xlim(ax, L):
+    ax.set_xlim(-0.06 * L, 1.06 * L)   # room for the support glyphs and the axial arrow
+
+
+def _ha(x, L):
+    """Horizontal alignment that keeps a label at x inside the axes."""
+    return "left" if x < 0.35 * L else "right" if x > 0.65 * L else "center"
+
+
 def _draw_supports(ax, result, size):
     """Clamped ends as hatched walls, pinned ends as triangles; a free end has none."""
     from matplotlib.patches import Polygon, Rectangle
-    kinds = {"P1": ("clamped", "clamped"), "P2": ("clamped", "pinned"),
-             "P3": ("clamped", "free"), "P4": ("pinned", "pinned")}[result.scene.beam.supports]
+    kinds = _SUPPORT_KINDS[result.scene.beam.supports]
     L = result.scene.beam.length
     for x, kind, side in ((0.0, kinds[0], -1), (L, kinds[1], 1)):
         if kind == "clamped":
@@ -72,34 +100,60 @@ def _draw_supports(ax, result, size):
                                  closed=True, fill=False, lw=1.2, color="0.3"))
 
 
-def plot(result, ax=None, label: str | None = None, annotate: bool = True, color=None):
+def _zones_text(zones, L) -> str:
+    parts = [f"{a:.3g} (point)" if b - a <= 1e-12 * L else f"[{a:.3g}, {b:.3g}]" for a, b in zones]
+    text = ", ".join(parts[:3]) + (f" (+{len(parts) - 3} more)" if len(parts) > 3 else "")
+    return text or "none"
+
+
+def _title(result) -> str:
+    beam = result.scene.beam
+    method = "" if result.method == DEFAULT_METHOD else f", method {result.method}"
+    return (f"{beam.model}, supports {beam.supports}{method}, energy {result.energy:.4g} J "
+            f"({result.status})")
+
+
+def plot(result, ax=None, label: str | None = None, annotate: bool = True, color=None,
+         loads: bool = True):
     """Draw the deflection of a result with supports, foundation/obstacle and contact zones.
 
     Parameters
     ----------
     result : Result
     ax : matplotlib Axes, optional
-        Drawn on; a new figure's Axes by default.
+        Drawn on; by default a new figure, with the loads (:func:`plot_loads`)
+        in a panel above the deflection.
     label : str, optional
         Legend label of the curve.
     annotate : bool
-        Mark the extreme deflections.
+        Draw what several results on one Axes share once: the undeformed beam,
+        the surface, the supports and the extreme deflections.
     color : optional
-        Colour of the curve.
+        Colour of the curve and of its contact zones.
+    loads : bool
+        With ``ax=None``: add the loads panel.
 
     Returns
     -------
     matplotlib Axes
+        The deflection's Axes.
     """
+    L = result.scene.beam.length
     if ax is None:
         plt = _pyplot()
-        _, ax = plt.subplots(figsize=(8, 4))
-    L = result.scene.beam.length
+        if loads:
+            _, (top, ax) = plt.subplots(2, 1, figsize=(8, 6), sharex=True,
+                                        gridspec_kw={"height_ratios": [1, 2]})
+            plot_loads(result, top)
+        else:
+            _, ax = plt.subplots(figsize=(8, 4))
+    model = result.scene.beam.model
     xs = np.linspace(0.0, L, 801)
     w = result.deflection(xs)
     span = max(np.abs(w).max(), result.scene.gap or 0.0) or 1.0
-    ax.axhline(0.0, color="0.6", lw=1.0, ls="--", label="undeformed beam" if annotate else None)
-    ax.plot(xs, w, lw=2.0, color=color, label=label or f"{result.scene.beam.model} deflection")
+    if annotate:
+        ax.axhline(0.0, color="0.6", lw=1.0, ls="--", label="undeformed beam")
+    ax.plot(xs, w, lw=2.0, color=color, label=label or f"{model} deflection")
     gap = result.scene.gap
     if gap is not None:
         kind = result.scene.contact
@@ -108,41 +162,158 @@ def plot(result, ax=None, label: str | None = None, annotate: bool = True, color
                        label=f"{kind} surface (gap {gap:g} m)")
             if kind == "obstacle":
                 ax.axhspan(-gap - 0.15 * span, -gap, color="saddlebrown", alpha=0.15, lw=0)
-        for i, (a, b) in enumerate(result.zones or []):
+        zones = result.zones or []
+        for i, (a, b) in enumerate(zones):
             lo, hi = (a, b) if b > a else (a - 0.004 * L, b + 0.004 * L)
             ax.axvspan(lo, hi, color=color or "tab:red", alpha=0.12, lw=0,
-                       label=(f"contact zone{'' if annotate else ' (' + result.scene.beam.model + ')'}"
-                              if i == 0 else None))
-    _draw_supports(ax, result, 0.12 * span)
+                       label=f"{model} contact: {_zones_text(zones, L)}" if i == 0 else None)
+        if not zones:  # say so: an empty legend entry would read as "not computed"
+            ax.plot([], [], lw=0, label=f"{model} contact: none")
     if annotate:
-        for ext, va in ((result.min, "top"), (result.max, "bottom")):
+        _draw_supports(ax, result, 0.12 * span)
+        for ext, y in ((result.min, 0.05), (result.max, 0.95)):
             if abs(ext["w"]) > 1e-12 * span:
                 ax.plot([ext["x"]], [ext["w"]], "o", color="k", ms=4)
-                ax.annotate(f"{ext['w']:.4g} m\nat x = {ext['x']:.4g} m", (ext["x"], ext["w"]),
-                            textcoords="offset points", xytext=(6, -8 if va == "top" else 8),
-                            va=va, fontsize=8)
+                ax.annotate(f"{ext['w']:.4g} m at x = {ext['x']:.4g} m", (ext["x"], ext["w"]),
+                            xytext=(ext["x"], y), textcoords=ax.get_xaxis_transform(),
+                            ha=_ha(ext["x"], L), va="bottom" if y < 0.5 else "top", fontsize=8,
+                            arrowprops={"arrowstyle": "-", "color": "0.5", "lw": 0.6},
+                            annotation_clip=True)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("w [m] (up positive)")
-    ax.set_title(f"{result.scene.beam.model}, supports {result.scene.beam.supports}, "
-                 f"energy {result.energy:.4g} J ({result.status})", fontsize=10)
-    ax.set_xlim(-0.04 * L, 1.04 * L)
-    ax.set_ylim(-1.3 * span, 1.3 * span if result.max["w"] > 0.02 * span else 0.4 * span)
-    ax.legend(fontsize=8, loc="best")
+    ax.set_title(_title(result), fontsize=10)
+    _xlim(ax, L)
+    top = 1.3 * span if result.max["w"] > 0.02 * span else 0.45 * span
+    ax.set_ylim(-1.45 * span, top)
+    ax.legend(fontsize=8, loc="upper center" if result.max["w"] <= 0.02 * span else "best",
+              ncol=2)
+    return ax
+
+
+_BEAM = 0.6      # height of the beam in the loads panel (axes fraction)
+_ARROW = 0.33    # length of a force arrow (axes fraction)
+
+
+def _arrow(ax, x, y_tail, text, color, L):
+    """A force arrow at x from y_tail (axes fraction) onto the beam, its value beside the tail."""
+    trans = ax.get_xaxis_transform()
+    ax.annotate("", (x, _BEAM), xytext=(x, y_tail), xycoords=trans, textcoords=trans,
+                arrowprops={"arrowstyle": "-|>", "color": color, "lw": 1.4})
+    if text:
+        left = x < 0.5 * L   # the label on the inner side of the arrow
+        ax.text(x + (0.01 if left else -0.01) * L, y_tail, text, transform=trans,
+                ha="left" if left else "right", va="top" if y_tail > _BEAM else "bottom",
+                fontsize=7.5, color=color, clip_on=True)
+
+
+def plot_loads(result, ax=None):
+    """Draw what acts on the beam: the load profile, point forces, the axial force, reactions.
+
+    The distributed load q(x) is drawn to scale (left axis, N/m), filled
+    between the beam and q; point forces are blue arrows with their values,
+    pointing the way they act (up positive); the axial force P is a green arrow
+    at the right end (compression pushes into the beam); the support
+    reactions are red arrows with their values, and a clamped end's moment is
+    given with its sense (counter-clockwise positive).  The contact forces of a
+    foundation or obstacle are in the ``reaction`` panel of :func:`save_plot`.
+
+    Parameters
+    ----------
+    result : Result
+    ax : matplotlib Axes, optional
+
+    Returns
+    -------
+    matplotlib Axes
+    """
+    if ax is None:
+        plt = _pyplot()
+        _, ax = plt.subplots(figsize=(8, 2.4))
+    scene = result.scene
+    L = scene.beam.length
+    load = scene.load
+    # The distributed load to scale, the beam at height _BEAM; a table's knots exactly.
+    xs = np.linspace(0.0, L, 801)
+    qmax, what = 1.0, "no distributed load"
+    if load.q is not None:
+        table = np.array(load.q if load.is_table else [(0.0, load.q), (L, load.q)], float)
+        xs = np.union1d(xs, table[:, 0])
+        q = np.interp(xs, table[:, 0], table[:, 1], left=0.0, right=0.0)
+        qmax = float(np.abs(q).max()) or 1.0
+        ax.fill_between(xs, 0.0, q, color="tab:blue", alpha=0.2, lw=0)
+        ax.plot(xs, q, color="tab:blue", lw=1.0)
+        what = (f"q = {load.q:.4g} N/m" if not load.is_table
+                else f"q from a table, {table[:, 1].min():.3g} to {table[:, 1].max():.3g} N/m")
+        ax.set_ylabel("q [N/m]")
+    else:
+        ax.set_yticks([])
+    unit = qmax / _ARROW
+    ax.set_ylim(-_BEAM * unit, (1 - _BEAM) * unit)
+    ax.plot([0, L], [0, 0], color="k", lw=3, solid_capstyle="butt", zorder=3)
+    # Point forces: down from above, up from below.
+    points = np.asarray(load.points, float).reshape(-1, 2)
+    if 0 < len(points) <= MAX_LABELLED_FORCES:
+        for i, (x, F) in enumerate(points[np.argsort(points[:, 0])]):
+            stagger = 0.07 * (i % 2)   # neighbours' labels at two heights
+            tail = (0.97 - stagger) if F < 0 else (_BEAM - _ARROW - stagger)
+            _arrow(ax, x, tail, f"F = {F:.3g} N", "tab:blue", L)
+    elif len(points):
+        trans = ax.get_xaxis_transform()
+        down, up = points[points[:, 1] < 0, 0], points[points[:, 1] >= 0, 0]
+        ax.vlines(down, _BEAM, _BEAM + _ARROW, transform=trans, color="tab:blue", lw=0.5)
+        ax.vlines(up, _BEAM - _ARROW, _BEAM, transform=trans, color="tab:blue", lw=0.5)
+        what += f"; {len(points)} point forces, sum {points[:, 1].sum():.4g} N"
+    # The axial force at x = L: compression (P > 0) pushes into the beam.
+    P = load.axial
+    if P:
+        trans = ax.get_xaxis_transform()
+        a, b = (1.055 * L, 1.004 * L) if P > 0 else (1.004 * L, 1.055 * L)
+        ax.annotate("", (b, _BEAM), xytext=(a, _BEAM), xycoords=trans, textcoords=trans,
+                    arrowprops={"arrowstyle": "-|>", "color": "tab:green", "lw": 1.6})
+        kind = "compression" if P > 0 else "tension"
+        ax.text(0.99 * L, _BEAM + 0.04, f"P = {abs(P):.4g} N ({kind})", transform=trans,
+                ha="right", va="bottom", fontsize=7.5, color="tab:green", clip_on=True)
+    # Support reactions: the force and moment the support exerts on the beam.
+    trans = ax.get_xaxis_transform()
+    for s in result.support_reactions:
+        x, R, M = s["x"], s["force"], s["moment"]
+        tail = 0.03 if R >= 0 else 0.97
+        _arrow(ax, x, tail, f"R = {R:.4g} N", "tab:red", L)
+        if _SUPPORT_KINDS[scene.beam.supports][0 if x < 0.5 * L else 1] == "clamped":
+            left = x < 0.5 * L
+            sense = "\u21ba" if M >= 0 else "\u21bb"   # counter-clockwise / clockwise
+            ax.text(x + (0.01 if left else -0.01) * L, 0.5 * (tail + _BEAM),
+                    f"M = {M:.4g} N m {sense}", transform=trans, ha="left" if left else "right",
+                    va="center", fontsize=7.5, color="tab:red", clip_on=True)
+    ax.set_title(f"loads: {what}{'; axial force P' if P else ''} | support reactions (red): "
+                 "up and counter-clockwise positive", fontsize=8)
+    _xlim(ax, L)
     return ax
 
 
 def _panel(ax, result, panel):
     L = result.scene.beam.length
     xs = np.linspace(0.0, L, 801)
+    if panel in ("moment", "shear"):
+        # Both sides of every node and point force: V jumps there, M kinks.
+        jumps = np.r_[result.x, [p[0] for p in result.scene.load.points]]
+        if result.contact_forces is not None:
+            jumps = np.r_[jumps, result.contact_forces[:, 0]]
+        xs = np.union1d(xs, np.clip(np.r_[jumps, jumps - 1e-9 * L], 0.0, L))
     if panel == "slope":
         ax.plot(xs, result.slope_at(xs))
         ax.set_ylabel("w' [-]")
     elif panel == "moment":
         ax.plot(xs, result.moment(xs))
         ax.set_ylabel("M = EI w'' [N m]")
+        if result.scene.beam.model == "gao":
+            # The Gao model's loads act as (1 - nu^2) q: M and V balance those,
+            # the reactions the loads as given (docs/model.md, Support reactions).
+            ax.text(0.99, 0.04, "gao: M and V balance the loads times (1 - nu^2)",
+                    transform=ax.transAxes, ha="right", va="bottom", fontsize=7, color="0.35")
     elif panel == "shear":
-        ax.plot(xs, result.shear(xs), drawstyle="steps-mid")
-        ax.set_ylabel("V = (EI w'')' [N]")
+        ax.plot(xs, result.shear(xs))
+        ax.set_ylabel("V = dM/dx [N]")
     elif panel == "reaction":
         if result.reaction is None:
             ax.text(0.5, 0.5, "no foundation or obstacle", ha="center", transform=ax.transAxes)
@@ -155,59 +326,131 @@ def _panel(ax, result, panel):
 
 
 def save_plot(result, path, panels=()) -> Path:
-    """Write the picture of a result (and optional panels) to ``path`` (.png or .svg)."""
+    """Write the picture of a result (:func:`result_figure`) to ``path`` (.png or .svg)."""
     path = _check_file(path)
+    fig = result_figure(result, panels)
+    return _write(_pyplot(), fig, path)
+
+
+def result_figure(result, panels=()):
+    """The picture of a result: loads and reactions, deflection, then the ``panels``.
+
+    The loads and support reactions (:func:`plot_loads`) on top, the deflection
+    (:func:`plot`) below them, then the optional ``panels`` (PANELS).  Returns
+    the matplotlib Figure (the caller saves or closes it).
+    """
     for p in panels:
         if p not in PANELS:
             raise SceneError("--panels", f"unknown panel (known: {', '.join(PANELS)})", p)
     plt = _pyplot()
-    n = 1 + len(panels)
-    fig, axes = plt.subplots(n, 1, figsize=(8, 4 + 2.2 * len(panels)), sharex=True,
-                             gridspec_kw={"height_ratios": [2] + [1] * len(panels)}, squeeze=False)
-    plot(result, axes[0, 0])
-    for ax, panel in zip(axes[1:, 0], panels):
+    n = 2 + len(panels)
+    fig, axes = plt.subplots(n, 1, figsize=(8, 6 + 2.2 * len(panels)), sharex=True,
+                             gridspec_kw={"height_ratios": [1, 2] + [1] * len(panels)},
+                             squeeze=False)
+    plot_loads(result, axes[0, 0])
+    plot(result, axes[1, 0])
+    for ax, panel in zip(axes[2:, 0], panels):
         _panel(ax, result, panel)
-    return _write(plt, fig, path)
+    for ax in axes[:-1, 0]:   # the shared x-axis is labelled once, at the bottom
+        ax.set_xlabel("")
+    axes[-1, 0].set_xlabel("x [m]")
+    fig.tight_layout()
+    return fig
 
 
 def save_compare_plot(results: dict, path) -> Path:
-    """Euler-Bernoulli and Gao deflections of one scene on one picture."""
+    """Write :func:`compare_figure` to ``path`` (.png or .svg)."""
     path = _check_file(path)
+    return _write(_pyplot(), compare_figure(results), path)
+
+
+def compare_figure(results: dict):
+    """Euler-Bernoulli and Gao deflections of one scene on one picture (a Figure).
+
+    The supports, surface and undeformed beam are drawn once; each model's
+    curve and contact zones have its colour and a legend entry.
+    """
     plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(8, 4))
+    fig, ax = plt.subplots(figsize=(8, 4.5))
     colors = {"euler-bernoulli": "tab:blue", "gao": "tab:orange"}
     for i, (model, result) in enumerate(results.items()):
         plot(result, ax, label=f"{model}: min {result.min['w']:.4g} m, energy {result.energy:.4g} J",
              annotate=i == 0, color=colors.get(model))
-    ax.set_title(f"Euler-Bernoulli and Gao, supports {result.scene.beam.supports}", fontsize=10)
-    return _write(plt, fig, path)
+    methods = {r.method for r in results.values()} - {DEFAULT_METHOD}
+    named = f", method {', '.join(sorted(methods))}" if methods else ""
+    ax.set_title(f"Euler-Bernoulli and Gao, supports {result.scene.beam.supports}{named}",
+                 fontsize=10)
+    fig.tight_layout()
+    return fig
 
 
 def save_sweep_plot(rows: list, key: str, path, reference: dict | None = None,
-                    log: bool = False) -> Path:
-    """How max deflection, energy and contact length move with the swept value.
-
-    ``reference`` (e.g. the rigid obstacle's numbers for a foundation-stiffness
-    sweep) is drawn as horizontal lines.
-    """
+                    log: bool = False, scene=None) -> Path:
+    """Write :func:`sweep_figure` to ``path`` (.png or .svg)."""
     path = _check_file(path)
+    return _write(_pyplot(), sweep_figure(rows, key, reference, log, scene), path)
+
+
+def sweep_figure(rows: list, key: str, reference: dict | None = None, log: bool = False,
+                 scene=None):
+    """How max deflection, energy and contact length move with the swept value (a Figure).
+
+    Parameters
+    ----------
+    rows : list of dict
+        :func:`gaocvx.sweep.summary_row` of each value.
+    key : str
+        The swept key; its unit (UNITS) labels the x-axis.
+    reference : dict, optional
+        Numbers drawn as horizontal lines (e.g. the rigid obstacle's for a
+        foundation-stiffness sweep).
+    log : bool
+        Logarithmic x-axis.
+    scene : Scene, optional
+        The swept scene: without a foundation or obstacle there is no contact
+        panel, and an axial sweep marks the convexity limit P_bar_h.
+    """
     plt = _pyplot()
     ok = [r for r in rows if r["status"] != "error"]
     x = np.array([r["value"] for r in ok])
-    fig, axes = plt.subplots(3, 1, figsize=(7, 8), sharex=True)
+    contact = (scene.contact is not None) if scene is not None else any("penetration" in r for r in ok)
     series = [("max |w| [m]", [max(abs(r["min_w"]), abs(r["max_w"])) for r in ok], "max_abs_w"),
-              ("energy [J]", [r["energy"] for r in ok], "energy"),
-              ("contact length [m]", [r["contact_length"] for r in ok], "contact_length")]
+              ("energy [J]", [r["energy"] for r in ok], "energy")]
+    if contact:
+        series.append(("contact length [m]", [r["contact_length"] for r in ok], "contact_length"))
+    fig, axes = plt.subplots(len(series), 1, figsize=(7, 2.7 * len(series) + 0.6), sharex=True,
+                             squeeze=False)
+    axes = axes[:, 0]
+    p_bar = None
+    if scene is not None and key == "load.axial":
+        from .discrete import DiscreteProblem
+        p_bar = DiscreteProblem(scene, check_convexity=False).P_bar_h
     for ax, (label, y, ref_key) in zip(axes, series):
         ax.plot(x, y, "o-", ms=3)
+        if ref_key == "contact_length":
+            # A point contact has length 0 but is contact: mark it.
+            pts = [(r["value"], r["contact_length"]) for r in ok
+                   if r.get("contact_zones", 0) and r["contact_length"] == 0]
+            if pts:
+                px, py = zip(*pts)
+                ax.plot(px, py, "v", color="tab:red", ms=6, label="point contact (length 0)")
         if reference and ref_key in reference:
+            point = (ref_key == "contact_length" and reference[ref_key] == 0
+                     and reference.get("contact_zones", 0) > 0)
             ax.axhline(reference[ref_key], color="saddlebrown", ls="--",
-                       label=reference.get("label", "reference"))
+                       label=reference.get("label", "reference")
+                       + (": point contact (length 0)" if point else ""))
+        if p_bar is not None:
+            ax.axvline(p_bar, color="tab:red", ls=":", lw=1.2,
+                       label=f"P_bar_h = {p_bar:.4g} N" if ax is axes[0] else None)
+        if ax.get_legend_handles_labels()[0]:
             ax.legend(fontsize=8)
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
         if log:
             ax.set_xscale("log")
-    axes[-1].set_xlabel(key)
+    unit = UNITS.get(key, "-")
+    axes[-1].set_xlabel(f"{key} [{unit}]")
     fig.suptitle(f"sweep of {key}", fontsize=10)
-    return _write(plt, fig, path)
+    fig.tight_layout()
+    return fig

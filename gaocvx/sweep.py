@@ -245,6 +245,7 @@ def summary_row(value: float, item) -> dict:
     row = {"value": value, "status": r.status, "method": r.method,
            "min_w": r.min["w"], "min_x": r.min["x"], "max_w": r.max["w"], "max_x": r.max["x"],
            "energy": r.energy, "contact_length": float(sum(b - a for a, b in zones)),
+           "contact_zones": len(zones),   # a point contact [x, x] counts, though of length 0
            "time_s": r.time_s}
     gap = r.scene.gap
     if gap is not None:

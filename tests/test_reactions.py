@@ -72,6 +72,21 @@ def test_pinned_end_carries_no_moment_and_free_end_no_reaction():
     assert [s["x"] for s in r.support_reactions] == [0.0]
 
 
+@pytest.mark.parametrize("elements", [1, 3, 16])
+def test_shear_is_linear_and_moment_parabolic_under_uniform_load(elements):
+    """Simply supported EB beam under q: V = q (x - L/2) and M = -q x (L - x) / 2 at any x.
+
+    The cubic's own third derivative would be a staircase (constant per
+    element); element equilibrium gives the exact line on any mesh, to round-off.
+    """
+    r = solve(Scene.from_dict(scene_dict("P4", "euler-bernoulli", length=L, q=q,
+                                         elements=elements)))
+    xs = np.r_[0.0, np.random.default_rng(1).uniform(0, L, 200), L]
+    V, M = q * (xs - L / 2), -q * xs * (L - xs) / 2
+    assert np.abs(r.shear(xs) - V).max() <= 1e-10 * abs(q * L / 2)
+    assert np.abs(r.moment(xs) - M).max() <= 1e-10 * abs(q * L**2 / 8)
+
+
 # ------------------------------------------------------------------ equilibrium
 def _gauss(x, n=5):
     t, wt = np.polynomial.legendre.leggauss(n)
