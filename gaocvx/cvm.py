@@ -43,6 +43,7 @@ reduced Hessian ``S' H S``).
 
 from __future__ import annotations
 
+import copy
 import math
 import time
 
@@ -53,8 +54,8 @@ import scipy.sparse.linalg as spla
 from . import fem
 from .discrete import DiscreteProblem
 from .errors import SceneError
+from .cvm_minimizers import conditional_gradient, projected_newton
 from .linalg import BandedCholesky
-from .newton import line_search
 
 __all__ = ["make_transform", "solve_cvm", "TRANSFORMS", "CONTROLS", "MINIMIZERS"]
 
@@ -123,6 +124,72 @@ def moment_load(dp: DiscreteProblem, x) -> np.ndarray:
     return G
 
 
+# ------------------------------------------------------------------ accurate building blocks
+def nonlinear_gradient(dp: DiscreteProblem, U) -> np.ndarray:
+    """Gradient of the Gao, axial and foundation energies at free Hermite DOFs U.
+
+    From slopes and deflections at quadrature points, never as
+    ``grad Pi - (K U - f)``: K U cancels terms of size N^3, which would put
+    ~N^4 eps of noise into the controls' gradient on fine meshes.
+    """
+    r = np.zeros(dp.n)
+    if dp.needs_gao or dp.p:
+        s = dp.B1 @ U
+        r += dp.B1T @ (dp.wq_gao * ((dp.a / 3.0) * s**3 - dp.p * s))
+    if dp.contact == "foundation":
+        pen = np.maximum(dp.g - dp.Nq @ U, 0.0)
+        r -= dp.c * (dp.NqT @ (dp.wq_c * pen))
+    return r
+
+
+def nonlinear_hessian(dp: DiscreteProblem, U) -> sp.csr_matrix:
+    """(Generalised) Hessian of the Gao, axial and foundation energies at U; banded.
+
+    The beam's Hessian is ``K + nonlinear_hessian``; kept apart so that K is
+    never applied to a state (see :func:`nonlinear_gradient`).
+    """
+    H = sp.csr_matrix((dp.n, dp.n))
+    if dp.needs_gao or dp.p:
+        s = dp.B1 @ U
+        H = H + dp.B1T @ sp.diags(dp.wq_gao * (dp.a * s**2 - dp.p)) @ dp.B1
+    if dp.contact == "foundation":
+        active = (dp.g - dp.Nq @ U) > 0
+        H = H + dp.NqT @ sp.diags(dp.c * dp.wq_c * active) @ dp.Nq
+    return H.tocsr()
+
+
+class BendingSolver:
+    """Solves ``K U = b`` with the Hermite bending matrix K in well-conditioned variables.
+
+    K has condition number ~N^4: a banded Cholesky solve loses ~N^4 eps
+    (1e-4 of a cantilever's tip deflection at 2048 elements, everything at
+    16384).  The same system in the mixed variables of :mod:`gaocvx.mixed`
+    (deflections, slopes, chord slopes; an exact re-parametrisation of the
+    Hermite space) has only first differences and is solved by one banded LU
+    of its KKT matrix, factored once per mesh and shared with the ground
+    truth's solver.
+    """
+
+    def __init__(self, dp: DiscreteProblem):
+        from .mixed import MixedForm
+        flat = copy.copy(dp)
+        flat.p = 0.0  # K alone, without the axial part
+        self.mf = MixedForm(flat)
+        self.factor = self.mf.quadratic_factor
+        self.dp = dp
+
+    def solve(self, b) -> np.ndarray:
+        """``K^-1 b`` for a load vector b on the free Hermite DOFs."""
+        dp, mf = self.dp, self.mf
+        F = np.zeros(2 * dp.n_nodes)
+        F[dp.free] = b
+        fz = np.zeros(mf.nz)
+        fz[0::3] = F[0::2]  # the load acts on the deflections and slopes only
+        fz[1::3] = F[1::2]
+        z, _ = self.factor.solve(fz[mf.free], np.zeros(mf.N))
+        return mf.to_hermite(z)
+
+
 # ------------------------------------------------------------------ transforms
 class _Transform:
     """The affine state map ``U(u) = U0 + S u`` with the thesis's cost and adjoint.
@@ -153,10 +220,49 @@ class _Transform:
         U = self.state(u) if U is None else U
         return self._adjoint_gradient(u, U)
 
-    def reduced_hessian(self, U) -> np.ndarray:
-        """The exact (generalised) reduced Hessian ``S' H(U) S``, dense."""
-        S = self.apply_S(np.eye(self.m))
-        return S.T @ (self.dp.hessian(U) @ S)
+    def state_hessian(self, U) -> sp.csr_matrix:
+        """The nonlinear part ``Hn`` of the beam's (generalised) Hessian at U (banded).
+
+        The beam's Hessian is ``K + Hn``; :meth:`hessian_vector` applies the
+        K part through the state equation, without multiplying a state by K.
+        """
+        return nonlinear_hessian(self.dp, U)
+
+    def hessian_vector(self, Hn, v) -> np.ndarray:
+        """The reduced Hessian times v, ``S'(K + Hn)S v``: one state and one adjoint solve.
+
+        ``J(u) = Pi(U0 + S u) + const`` (tested), so this is the exact
+        (generalised) Hessian of the reduced cost; it is never formed.
+        """
+        raise NotImplementedError
+
+    def bending_preconditioner(self, free):
+        """``g -> (S_F' K S_F)^-1 g``: the inverse reduced Hessian of the bending energy alone.
+
+        ``S_F`` is S restricted to the controls ``free`` (a boolean mask) and K
+        the bending matrix.  The reduced Hessian ``S'HS`` differs from
+        ``S'KS`` by the Gao, axial and foundation terms, which are of lower
+        order, so the preconditioned operator has eigenvalues in
+        ``[theta, 1 + (lower-order terms)]`` independent of N, where ``S'HS``
+        itself has condition number ~N^4 (T1).  Built once per free set: a
+        sparse factorisation, O(N) memory.
+        """
+        raise NotImplementedError
+
+    def curvature_floor(self) -> float:
+        """theta > 0 with ``v'Hv >= theta v'Kv`` for every v and every state: proved.
+
+        H = K - p G + (Gao and foundation terms, positive semidefinite), so
+        ``theta = 1 - p / p_bar_h`` for compression, with p_bar_h the lower
+        end of the enclosure of the convexity limit (:mod:`gaocvx.limit`), and
+        1 otherwise.
+        """
+        dp = self.dp
+        if not dp.p > 0:
+            return 1.0
+        from . import limit
+        lower = limit.analysis(dp).enclosure().lower
+        return max(1.0 - dp.p / lower, 0.0) or math.nan
 
     def nonlinear(self, U) -> float:
         parts = self.dp.energy_parts(U)
@@ -168,7 +274,7 @@ class _T1(_Transform):
 
     def __init__(self, dp, control):
         super().__init__(dp, control)
-        self.chol = dp._K_chol
+        self.chol = BendingSolver(dp)
         n = dp.n
         if control == "full":
             self.B = sp.identity(n, format="csr")
@@ -193,6 +299,14 @@ class _T1(_Transform):
     def apply_S(self, u):
         return self.chol.solve(self.B @ u)
 
+    def hessian_vector(self, Hn, v):
+        # K S v = B v exactly: the state equation, no product with K.
+        return self.apply_ST(self.B @ v + Hn @ self.apply_S(v))
+
+    def bending_preconditioner(self, free):
+        # S'KS = B'K^-1 K K^-1 B = B'K^-1 B
+        return _saddle_inverse(self.dp.K, self.B[:, np.flatnonzero(free)])
+
     def apply_ST(self, y):
         return self.B.T @ self.chol.solve(y)
 
@@ -200,7 +314,7 @@ class _T1(_Transform):
         return 0.5 * (self.B @ u) @ (U - self.U0) + self.nonlinear(U)
 
     def _adjoint_gradient(self, u, U):
-        p = self.chol.solve(0.5 * (self.B @ u) + self.dp.nonlinear_gradient(U))
+        p = self.chol.solve(0.5 * (self.B @ u) + nonlinear_gradient(self.dp, U))
         return self.B.T @ (p + 0.5 * (U - self.U0))
 
 
@@ -244,6 +358,14 @@ class _T2(_Transform):
     def apply_S(self, u):
         return self.T(self.echol.solve(self.Bz @ u))
 
+    def hessian_vector(self, Hn, v):
+        # T'KT = E (w = ∫ z exactly), so S'KSv = Bz'E^-1 Bz v.
+        return self.Bz.T @ self.echol.solve(self.Bz @ v + self.TT(Hn @ self.apply_S(v)))
+
+    def bending_preconditioner(self, free):
+        # w = ∫ z exactly, so the bending energy is ½ z'Ez and S'KS = Bz'E^-1 Bz.
+        return _saddle_inverse(self.E, self.Bz[:, np.flatnonzero(free)])
+
     def apply_ST(self, y):
         return self.Bz.T @ self.echol.solve(self.TT(y))
 
@@ -253,7 +375,7 @@ class _T2(_Transform):
 
     def _adjoint_gradient(self, u, U):
         z = self.echol.solve(self.Gv + self.Bz @ u)
-        p = self.echol.solve(0.5 * (self.Bz @ u) + self.TT(self.dp.nonlinear_gradient(U)))
+        p = self.echol.solve(0.5 * (self.Bz @ u) + self.TT(nonlinear_gradient(self.dp, U)))
         return self.Bz.T @ (p + 0.5 * (z - self.z0))
 
 
@@ -291,6 +413,19 @@ class _T3(_Transform):
     def apply_S(self, u):
         return self.A_lu.solve(np.asarray(self.C @ (self.Q @ u)))
 
+    def hessian_vector(self, Hn, v):
+        # The bending energy is ½ ∫ m^2 (w'' = -m exactly): S'KSv = Q'Md Q v.
+        return self.Q.T @ (self.Md @ (self.Q @ v)) + self.apply_ST(Hn @ self.apply_S(v))
+
+    def bending_preconditioner(self, free):
+        # w'' = -(Pi G + u) exactly, so the bending energy is ½ ∫ m^2 and
+        # S'KS = Q'Md Q: tridiagonal, well conditioned (the mass matrix of the controls).
+        idx = np.flatnonzero(free)
+        if len(idx) == 0:
+            return lambda g: np.zeros(0)
+        lu = spla.splu((self.Q.T @ self.Md @ self.Q)[idx][:, idx].tocsc())
+        return lu.solve
+
     def apply_ST(self, y):
         return self.Q.T @ (self.C.T @ self.A_lu.solve(np.asarray(y), trans="T"))
 
@@ -300,8 +435,34 @@ class _T3(_Transform):
 
     def _adjoint_gradient(self, u, U):
         # Adjoint state of the moment-deflection system, loaded by the nonlinear forces.
-        p = self.C.T @ self.A_lu.solve(self.dp.nonlinear_gradient(U), trans="T")
+        p = self.C.T @ self.A_lu.solve(nonlinear_gradient(self.dp, U), trans="T")
         return self.Q.T @ (self.Md @ (self.Q @ u) + p)
+
+
+def _saddle_inverse(A, B):
+    """``g -> (B' A^-1 B)^-1 g`` for SPD sparse A and B of full column rank, in O(N).
+
+    ``(B'A^-1B)^-1`` is dense, but ``[[A, B], [B', 0]] [y; z] = [0; g]`` gives
+    ``z = -(B'A^-1B)^-1 g``; the bordered system is sparse and is factored
+    once.  It is first scaled symmetrically (A to a unit diagonal, the columns
+    of B to unit norm): the entries of A and B differ by ~N^4 on fine meshes.
+    """
+    m = B.shape[1]
+    if m == 0:
+        return lambda g: np.zeros(0)
+    d1 = 1.0 / np.sqrt(A.diagonal())
+    Bs = sp.diags(d1) @ B
+    d2 = 1.0 / np.sqrt(np.asarray(Bs.multiply(Bs).sum(axis=0)).ravel())
+    Bs = Bs @ sp.diags(d2)
+    As = sp.diags(d1) @ A @ sp.diags(d1)
+    lu = spla.splu(sp.bmat([[As, Bs], [Bs.T, None]]).tocsc())
+    n = A.shape[0]
+
+    def solve(g):
+        rhs = np.concatenate([np.zeros(n), d2 * np.asarray(g, float)])
+        return -d2 * lu.solve(rhs)[n:]
+
+    return solve
 
 
 def _load_knots(dp) -> np.ndarray:
@@ -417,114 +578,6 @@ def make_transform(dp: DiscreteProblem, transform: str = "auto", control: str = 
     return {"T1": _T1, "T2": _T2, "T3": _T3}[name](dp, control)
 
 
-# ------------------------------------------------------------------ minimisers
-def _box_gap(u, g, C, bounded):
-    """Frank-Wolfe gap g'(u - s), s the box vertex minimising g's (>= I(u) - I*)."""
-    s = np.where(bounded, -C * np.sign(g), u)
-    return float(g @ (u - s)), s
-
-
-def conditional_gradient(tr, u, C, bounded, tol, max_iter):
-    """The thesis's conditional gradient method, with an exact line search.
-
-    Stops when the Frank-Wolfe gap ``g'(u - s)``, an upper bound of
-    ``I(u) - min I``, falls below ``tol * |I(u)|``.  The gap scales with C,
-    so a generous bound makes this test strict (and the method slow).
-    """
-    dp = tr.dp
-    U = tr.state(u)
-    scale = max(abs(tr.cost(u, U)), 1e-300)
-    for it in range(1, max_iter + 1):
-        g = tr.gradient(u, U)
-        gap, s = _box_gap(u, g, C, bounded)
-        if gap <= tol * scale:
-            return u, it - 1, True, gap / scale, None
-        d = s - u
-        # J = Pi(U(u)) + const with U affine: search along U + gamma S d,
-        # phi'(gamma) = grad Pi(U + gamma Sd)' Sd, without further state solves.
-        Sd = tr.apply_S(d)
-        gamma = line_search(lambda t: float(dp.gradient(U + t * Sd) @ Sd), float(g @ d),
-                            rtol=1e-8, max_eval=40)
-        if gamma is None:  # no decrease along the vertex direction at this precision
-            break
-        u = u + gamma * d
-        U = U + gamma * Sd
-    gap, _ = _box_gap(u, tr.gradient(u, U), C, bounded)
-    return u, it, gap <= tol * scale, gap / scale, None
-
-
-def projected_newton(tr, u, C, bounded, tol, max_iter):
-    """Bertsekas's projected Newton method on the box, with the exact reduced Hessian.
-
-    The optimality test is the reduced Newton decrement on the free variables
-    together with the sign condition of the gradient on the variables held at
-    their bounds.
-    """
-    lo = np.where(bounded, -C, -np.inf)
-    hi = np.where(bounded, C, np.inf)
-    measure = math.inf
-    for it in range(1, max_iter + 1):
-        U = tr.state(u)
-        g = tr.gradient(u, U)
-        eps = min(1e-8 * C, float(np.linalg.norm(u - np.clip(u - g, lo, hi))))
-        held = ((u <= lo + eps) & (g > 0)) | ((u >= hi - eps) & (g < 0))
-        free = ~held
-        H = tr.reduced_hessian(U)
-        d = np.zeros_like(u)
-        Hf = H[np.ix_(free, free)]
-        L = _regularised_cholesky(Hf)
-        if L is None:  # not even a regularised factor: say so
-            return u, it, False, measure, ("the reduced Hessian could not be factored "
-                                           "(too ill-conditioned at this size)")
-        d[free] = -_cho(L, g[free])
-        dec2 = float(-(g[free] @ d[free]))
-        cost0 = tr.cost(u, U)
-        measure = math.sqrt(max(dec2, 0.0) / (abs(cost0) or 1.0))
-        if measure <= tol:
-            return u, it - 1, True, measure, None
-        # Projected search along the arc u(t) = P(u + t d); held variables
-        # move along -g scaled by the Hessian's diagonal.
-        if held.any():
-            d[held] = -g[held] / np.maximum(np.diag(H)[held], 1e-300)
-        t = 1.0
-        for _ in range(50):
-            trial = np.clip(u + t * d, lo, hi)
-            # Armijo along the projection arc; once the decrement is tiny the cost
-            # change is below round-off and the (locally quadratic) step is taken.
-            if measure < 1e-6 or tr.cost(trial) <= cost0 + 1e-4 * float(g @ (trial - u)):
-                break
-            t *= 0.5
-        else:
-            return u, it, False, measure, "the projected line search failed"
-        u = trial
-    return u, max_iter, measure <= tol, measure, None
-
-
-def _regularised_cholesky(H):
-    """Cholesky factor of H, adding a growing multiple of its diagonal scale if needed.
-
-    The reduced Hessian S'HS inherits the N^4 conditioning of the state
-    equation, and on fine meshes round-off can cost it its definiteness; a
-    shift of up to 1e-6 of the largest diagonal entry still gives a descent
-    direction (the optimality test, not the factor, decides convergence).
-    """
-    top = float(np.max(np.diag(H), initial=0.0)) or 1.0
-    shift = 0.0
-    for _ in range(10):
-        try:
-            return np.linalg.cholesky(H + shift * np.eye(len(H)))
-        except np.linalg.LinAlgError:
-            shift = 1e-14 * top if shift == 0.0 else shift * 10.0
-            if shift > 1e-6 * top:
-                return None
-    return None
-
-
-def _cho(L, b):
-    import scipy.linalg as sla
-    return sla.cho_solve((L, True), b)
-
-
 # ------------------------------------------------------------------ driver
 def _default_bound(dp, tr) -> float:
     """A starting bound, in non-dimensional control units, far above the optimum.
@@ -570,10 +623,15 @@ def solve_cvm(dp: DiscreteProblem, transform: str = "auto", control: str = "P1",
     C = _default_bound(dp, tr) if adapt else bound / tr.scale
     u = np.zeros(tr.m)
     total_iter = 0
+    inner = {"cg_iterations": 0, "hessian_products": 0, "cg_unconverged": 0}
+    gaps = []
     for _ in range(7):
         run = projected_newton if newton else conditional_gradient
-        u, nit, ok, measure, note = run(tr, u, C, bounded, tol, max_iter)
+        u, nit, ok, measure, note, stats = run(tr, u, C, bounded, tol, max_iter)
         total_iter += nit
+        for k in inner:
+            inner[k] += stats.get(k, 0)
+        gaps += stats.get("gaps", [])
         active = bool(np.any(np.abs(u) >= C * (1 - 1e-9)))
         if not (adapt and active):
             break
@@ -583,7 +641,8 @@ def solve_cvm(dp: DiscreteProblem, transform: str = "auto", control: str = "P1",
     status = "optimal" if ok else "inaccurate"
     message = (f"cvm {tr.name}/{control} {minimizer}: "
                + ("optimality test passed" if ok else "optimality test NOT passed")
-               + f" (measure {measure:.2e}, tol {tol:.0e}, {total_iter} iterations)")
+               + f" (measure {measure:.2e}, tol {tol:.0e}, {total_iter} iterations"
+               + (f", {inner['cg_iterations']} CG iterations)" if newton else ")"))
     if note:
         message += f"; {note}"
     if active:
@@ -595,7 +654,7 @@ def solve_cvm(dp: DiscreteProblem, transform: str = "auto", control: str = "P1",
             "transform": tr.name, "control": control, "minimizer": minimizer,
             "iterations": total_iter, "control_bound_active": active,
             "bound": C * tr.scale, "bound_unit": tr.unit, "optimality_measure": measure,
-            "controls": len(u),
+            "controls": len(u), **(inner if newton else {"gaps": gaps}),
         },
         "control_values": u,
     }
