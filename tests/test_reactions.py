@@ -280,3 +280,27 @@ elements = 4
     text = capsys.readouterr().out
     assert "-0.0" not in text   # ... and the command line writes it as 0.0
     assert json.loads(text)["energy_parts"]["load"] == 0.0
+
+
+def test_example_states_its_elements_and_exact_reactions():
+    """examples/clamped_pinned_table_points.toml: 33 elements (a node inserted at x = 0.8) and
+    the reactions of the exact beam, R = EI w'''(0), M = -EI w''(0), R_L = -EI w'''(L)."""
+    from pathlib import Path
+
+    from exact import ExactBeam
+    from gaocvx import load_scene
+
+    path = Path(__file__).parent.parent / "examples" / "clamped_pinned_table_points.toml"
+    comment = path.read_text()
+    r = solve(load_scene(path))
+    assert len(r.x) - 1 == 33 and "33\n# elements" in comment and 0.8 in r.x
+    ex = ExactBeam("P2", 1.0, EI_THESIS, [[0.0, 0.0], [0.5, -6e7], [1.0, 0.0]],
+                   [(0.25, -2e7), (0.8, 1e7)])
+    exact = {0.0: (EI_THESIS * ex(0.0, 3)[0], -EI_THESIS * ex(0.0, 2)[0]),
+             1.0: (-EI_THESIS * ex(1.0, 3)[0], 0.0)}
+    for x, (force, moment) in exact.items():
+        got = reactions(r)[x]
+        assert got[0] == pytest.approx(force, rel=1e-10)
+        assert got[1] == pytest.approx(moment, rel=1e-10, abs=1e-10 * abs(force))
+    for text in ("3.50087e7 N", "7.00875e6 N m", "4.99125e6 N"):
+        assert text in comment
