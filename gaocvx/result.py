@@ -8,6 +8,8 @@ JSON object of scene-format.md.
 from __future__ import annotations
 
 import functools
+import logging
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -17,6 +19,8 @@ from .errors import format_value
 from .scene import Scene
 
 __all__ = ["Result", "contact_zones"]
+
+log = logging.getLogger(__name__)
 
 
 def contact_zones(x, in_contact) -> list[list[float]]:
@@ -105,7 +109,11 @@ class Result:
     @functools.cached_property
     def P_bar(self) -> float:
         """Discrete convexity limit P_bar_h [N] of the mesh solved on."""
-        return float(self.problem.P_bar_h)
+        t0 = time.perf_counter()
+        value = float(self.problem.P_bar_h)
+        log.info("P_bar_h = %.6g N (%d elements, %.1f ms)", value, len(self.x) - 1,
+                 (time.perf_counter() - t0) * 1e3)
+        return value
 
     @property
     def success(self) -> bool:
@@ -241,7 +249,7 @@ class Result:
         >>> from gaocvx import Scene, solve
         >>> r = solve(Scene.from_dict({"beam": {"model": "euler-bernoulli", "supports": "P4",
         ...     "length": 1.0, "EI": 1.0}, "load": {"q": -8.0}, "mesh": {"elements": 2}}))
-        >>> [round(v, 12) for v in r.shear([0.0, 0.1, 0.75])]   # q (x - L/2)
+        >>> r.shear([0.0, 0.1, 0.75]).round(12).tolist()   # q (x - L/2)
         [4.0, 3.2, -2.0]
         """
         xs = self._points(xs)
