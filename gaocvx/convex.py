@@ -158,13 +158,27 @@ class ConvexProgram:
             terms.append(self.a * (sigma**4 / 12.0)
                          * cp.quad_form(u, cp.psd_wrap(sp.diags(mf.wq5))))
         self.obstacle = None
-        if dp.contact is not None:
+        if dp.contact is not None and not (dp.bilateral and self.compressed):
             self.g = param(_level(mf), name="level")
-        if dp.contact == "foundation":
-            # c/2 sum w_q pos(g - w_q)^2 = c/2 sum w_q v_q^2 with v >= 0, v >= g - w_q.
+        self.bonded_in_form = dp.bilateral and self.compressed
+        if self.bonded_in_form:
+            # Bonded under compression: c/2 sum w_q (g - w_q)^2 has its quadratic part
+            # in the compressed form (above P_bar_h it is what makes that form
+            # positive definite); here its linear part and constant, as numbers
+            # (c g is a product of two parameters, not DPP: such a program is
+            # rebuilt for each scene, see set()).
+            depth0 = mf.depth(np.zeros(mf.n))
+            wd = mf.wqc * depth0
+            terms.append(-dp.c * ((mf.NqT @ wd) @ z) + 0.5 * dp.c * float(wd @ depth0))
+        elif dp.contact == "foundation":
+            # c/2 sum w_q pos(g - w_q)^2 = c/2 sum w_q v_q^2 with v >= 0, v >= g - w_q;
+            # bonded (bilateral): v = g - w_q.  v keeps the program DPP.
             self.c = param(dp.c, nonneg=True, name="stiffness")
             v = cp.Variable(len(mf.wqc), name="depth")
-            constraints += [v >= 0, v >= self.g - mf.Nq @ z]
+            if dp.bilateral:
+                constraints.append(v == self.g - mf.Nq @ z)
+            else:
+                constraints += [v >= 0, v >= self.g - mf.Nq @ z]
             terms.append(0.5 * self.c * cp.quad_form(v, cp.psd_wrap(sp.diags(mf.wqc))))
         elif dp.contact == "obstacle":
             self.obstacle = mf.A @ z >= self.g
@@ -181,6 +195,8 @@ class ConvexProgram:
         """
         if not self.parametric:
             raise ValueError("a program built without parameters cannot be updated")
+        if self.bonded_in_form:
+            return False
         shape = self.load_shape
         norm2 = float(shape @ shape)
         factor = float(mf.f @ shape) / norm2 if norm2 > 0 else 0.0
@@ -208,6 +224,8 @@ def _level(mf: MixedForm) -> float:
     deflection scale) the contact term vanishes near the answer, so raising
     the level there does not change the minimiser.
     """
+    if mf.dp.bilateral:  # a bonded foundation pulls from any distance: g itself
+        return mf.dp.g
     # At least one deflection scale below: with no load the bound is 0 (w = 0).
     return max(mf.dp.g, -max(2.0 * mf.deflection_bound(), 1.0))
 
@@ -233,14 +251,17 @@ def _slope_scale(mf: MixedForm) -> float:
 
 
 def _compressed_form(mf: MixedForm) -> sp.csr_matrix:
-    """bending - p axial + rho C'C, proved positive definite (below P_bar_h) by Cholesky."""
+    """bending - p axial (+ a bonded foundation's c M) + rho C'C, positive definite by Cholesky."""
     dp = mf.dp
     CtC = (mf.C.T @ mf.C).tocsr()
+    H0 = mf.H0
+    if dp.bilateral:
+        H0 = H0 + mf.NqT @ sp.diags(dp.c * mf.wqc) @ mf.Nq
     # C z = 0 on the feasible set, so rho C'C changes nothing there; it makes the
     # form definite off it (the rigid rotation of P4, directions that violate C).
     rho = 1.0 / float(np.min(np.diff(dp.xi))) ** 2
     for _ in range(12):
-        Q = (mf.H0 + rho * CtC).tocsr()
+        Q = (H0 + rho * CtC).tocsr()
         try:
             BandedCholesky(Q)
             return Q
@@ -265,7 +286,7 @@ def _program(mf: MixedForm, solver: str, reuse: bool) -> tuple[ConvexProgram, bo
         return ConvexProgram(mf), False
     dp = mf.dp
     # The compressed form depends on p, fixed when the program is built.
-    key = (structure_key(dp), dp.needs_gao, dp.p if dp.p > 0 else None, solver)
+    key = (structure_key(dp), dp.needs_gao, dp.p if dp.p > 0 else None, solver, dp.bilateral)
     program = _PROGRAMS.get(key)
     if program is not None and program.set(mf):
         return program, True

@@ -162,7 +162,19 @@ class DiscreteProblem:
             # limit by more than its round-off margin; nearer, the enclosure of
             # P_bar_h decides, and a P inside it is refused (gaocvx.limit).
             from . import limit
-            limit.check(self)
+            try:
+                limit.check(self)
+            except SceneError:
+                if not self.bilateral:
+                    raise
+                # A bonded foundation raises the limit to P_hat_h (gaocvx.foundation_limit).
+                from .foundation_limit import BondedLimit
+                if not BondedLimit(self.xi, scene.beam.supports, self.c).prove_below(self.p):
+                    raise SceneError(
+                        "load.axial", f"P = {self.P:.4g} N is not provably below the convexity "
+                        f"limit P_hat_h = {self.P_hat_h:.4g} N of the beam on its bonded "
+                        f"foundation (P_bar_h = {self.P_bar_h:.4g} N without it)",
+                        self.P) from None
 
     def _build(self, scene, elements, nodes, W_fixed):
         self.scene = scene
@@ -234,9 +246,11 @@ class DiscreteProblem:
         # Foundation / obstacle.
         self.contact = scene.contact
         self.c = 0.0
+        self.bilateral = False  # a bonded foundation: 1/2 c (w - g)^2, pulling too
         if self.contact == "foundation":
             self.k_F = scene.foundation.stiffness
             self.c = lf * self.k_F * L**4 / EI
+            self.bilateral = scene.foundation.bilateral
 
     def _set_scale(self, W: float) -> None:
         """Set the deflection scale W [m] and everything measured in it."""
@@ -263,8 +277,16 @@ class DiscreteProblem:
     def without_contact(self) -> "DiscreteProblem":
         """The same problem without its foundation or obstacle (for contact out of reach)."""
         new = copy.copy(self)
-        new.contact, new.c, new.g = None, 0.0, 0.0
+        new.contact, new.c, new.g, new.bilateral = None, 0.0, 0.0, False
         return new
+
+    def penetration(self, depth) -> np.ndarray:
+        """The foundation's compression from ``depth`` = g - w at its points.
+
+        A unilateral foundation acts only where the beam has sunk below it,
+        (g - w)^+; a bonded one everywhere, g - w (it pulls where w > g).
+        """
+        return depth if self.bilateral else np.maximum(depth, 0.0)
 
     # ------------------------------------------------------------------ quadrature
     # The Hermite-DOF matrices below serve CVM and the scoring of results; the
@@ -351,6 +373,18 @@ class DiscreteProblem:
         return full[self.free]
 
     @functools.cached_property
+    def P_hat_h(self) -> float | None:
+        """A bonded foundation's convexity limit [N] (thesis (2.44)); None for other scenes.
+
+        The smallest eigenvalue of (K + c M, mu G), >= P_bar_h: see
+        :mod:`gaocvx.foundation_limit`.
+        """
+        if not self.bilateral:
+            return None
+        from .foundation_limit import p_hat_h
+        return p_hat_h(self)
+
+    @functools.cached_property
     def P_bar_h(self) -> float:
         """Discrete convexity limit [N]: smallest eigenvalue of (K, mu G) on the free DOFs.
 
@@ -388,7 +422,7 @@ class DiscreteProblem:
             parts["gao"] = self.a / 12.0 * (self.wq_gao @ s**4)
             parts["axial"] = -0.5 * self.p * (self.wq_gao @ s**2)
         if self.contact == "foundation":
-            pen = np.maximum(self.g - self.Nq @ u, 0.0)
+            pen = self.penetration(self.g - self.Nq @ u)
             parts["foundation"] = 0.5 * self.c * (self.wq_c @ pen**2)
         return {k: float(v) for k, v in parts.items()}
 
@@ -406,7 +440,7 @@ class DiscreteProblem:
             s = self.B1 @ u
             r += (self.a / 3.0) * (self.B1T @ (self.wq_gao * s**3))
         if self.contact == "foundation":
-            pen = np.maximum(self.g - self.Nq @ u, 0.0)
+            pen = self.penetration(self.g - self.Nq @ u)
             r -= self.c * (self.NqT @ (self.wq_c * pen))
         return r
 
@@ -418,7 +452,7 @@ class DiscreteProblem:
             s = self.B1 @ u
             H = H + self.B1T @ sp.diags(self.a * self.wq_gao * s**2) @ self.B1
         if self.contact == "foundation":
-            active = (self.g - self.Nq @ u) > 0
+            active = (self.g - self.Nq @ u) > 0 if not self.bilateral else 1.0
             H = H + self.NqT @ sp.diags(self.c * self.wq_c * active) @ self.Nq
         return H.tocsr()
 

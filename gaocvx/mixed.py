@@ -438,7 +438,7 @@ class MixedForm:
             parts["gao"] = dp.a / 12.0 * (self.wq5 @ (s2 * s2))
             parts["axial"] = -0.5 * dp.p * (self.wq5 @ s2)
         if dp.contact == "foundation":
-            pen = np.maximum(self.depth(z), 0.0)
+            pen = dp.penetration(self.depth(z))
             parts["foundation"] = 0.5 * dp.c * (self.wqc @ (pen * pen))
         return {k: float(v) for k, v in parts.items()}
 
@@ -456,7 +456,7 @@ class MixedForm:
             g += self.B1T @ (self.wq5 * s * (dp.a / 3.0 * (s * s) - dp.p))
         if dp.contact == "foundation":
             pen = self.depth(z)
-            pen = np.maximum(pen, 0.0) if active is None else pen * active[0]
+            pen = dp.penetration(pen) if active is None else pen * active[0]
             g -= dp.c * (self.NqT @ (self.wqc * pen))
         if shift is not None:
             force = shift - rho * self.gap(z)
@@ -467,7 +467,9 @@ class MixedForm:
     def active_sets(self, z, shift=None, rho=0.0):
         """Where the contact terms act at ``z``: (foundation mask, obstacle mask)."""
         dp = self.dp
-        found = self.depth(z) > 0 if dp.contact == "foundation" else None
+        found = None
+        if dp.contact == "foundation":  # a bonded foundation acts everywhere
+            found = self.depth(z) > 0 if not dp.bilateral else np.ones(self.Nq.shape[0], bool)
         obst = (shift - rho * self.gap(z)) > 0 if shift is not None else None
         return found, obst
 
@@ -528,8 +530,9 @@ class MixedForm:
 
     @functools.cached_property
     def has_load(self) -> bool:
-        """True when any load acts (the load vector is not exactly zero)."""
-        return bool(np.any(self.f))
+        """True when any load acts: the load vector is not exactly zero, or a bonded
+        foundation's surface lies below the beam (it pulls the beam down to it)."""
+        return bool(np.any(self.f)) or bool(self.dp.bilateral and self.dp.g != 0)
 
     @functools.cached_property
     def load_scale(self) -> float:
@@ -575,6 +578,8 @@ class MixedForm:
         contact-free one (:meth:`deflection_bound`, with a factor 2 of margin).
         """
         dp = self.dp
+        if dp.bilateral:  # bonded: it acts at any distance
+            return False
         return dp.contact is not None and dp.g < -2.0 * self.deflection_bound()
 
     @property
@@ -589,6 +594,13 @@ class MixedForm:
         if not self.has_load:
             return 1.0  # the answer is w = 0 exactly; any unit serves
         return ZERO_ANSWER * self.dp.W_linear / self.dp.W
+
+    def energy_at_rest(self) -> float:
+        """The energy of w = 0 (non-dimensional): 0, or a bonded foundation's 1/2 c g^2 L.
+
+        w = 0 is admissible, so the minimiser's energy is at most this.
+        """
+        return float(sum(self.energy_parts(-self.origin).values())) if self.dp.bilateral else 0.0
 
     def no_contact_forces(self) -> np.ndarray | None:
         """Obstacle multipliers that are all zero (None without an obstacle)."""
@@ -611,7 +623,12 @@ class MixedForm:
         base = Hessian(self, H.gao)
         za = self.absolute(z)
         norm2 = float(za @ (base @ za))
-        if H.foundation is not None:
+        if self.dp.bilateral:
+            # Bonded: the foundation is part of the quadratic form (above P_bar_h
+            # it is what keeps that form positive), weighing w itself.
+            w = self.Nq @ za
+            norm2 += float(self.dp.c * (self.wqc @ (w * w)))
+        elif H.foundation is not None:
             norm2 += float(H.foundation @ self.depth(z) ** 2)
         return math.sqrt(max(norm2, 0.0))
 

@@ -342,9 +342,9 @@ def certify(mf: MixedForm, z, lam=None) -> dict:
         return {"stationarity": 0.0}
     H = mf.hessian(z)
     out = {"stationarity": _stationarity(mf, z, lam, H)}
-    # w = 0 is admissible with energy 0 (g <= 0), so the minimum is <= 0: a
-    # positive energy beyond round-off is no minimiser, whatever else holds.
-    energy = sum(mf.energy_parts(z).values())
+    # w = 0 is admissible with energy 0 (g <= 0; a bonded foundation's 1/2 c g^2 L),
+    # so the minimum is at most that: more beyond round-off is no minimiser.
+    energy = sum(mf.energy_parts(z).values()) - mf.energy_at_rest()
     if energy > COMPLEMENTARITY_TOL * mf.scale(z, H) ** 2:
         out["stationarity"] = math.inf
     if lam is not None:

@@ -51,6 +51,7 @@ SUPPORTS = ("P1", "P2", "P3", "P4")
 METHODS = ("auto", "convex", "newton", "cvm")
 TRANSFORMS = ("auto", "T1", "T2", "T3")
 CONTROLS = ("P1", "full")
+FOUNDATION_KINDS = ("unilateral", "bilateral")
 MINIMIZERS = ("projected-newton", "conditional-gradient")
 SOLVERS = ("clarabel", "osqp")
 MAX_ELEMENTS = 1_000_000
@@ -321,16 +322,28 @@ class Load:
 
 @dataclass(frozen=True)
 class Foundation:
-    """Deformable unilateral Winkler foundation: gap [m] >= 0, stiffness k_F [N/m^2] > 0."""
+    """Deformable Winkler foundation: gap [m] >= 0, stiffness k_F [N/m^2] > 0.
+
+    ``kind = "unilateral"`` (the default) pushes up only where the beam has
+    sunk below its surface, 1/2 c_F ((g - w)^+)^2; ``"bilateral"`` is bonded
+    to the beam (thesis (2.1), (2.43), "as for railway tracks"), 1/2 c_F (w - g)^2:
+    it pulls as well as pushes, and raises the convexity limit to P_hat (2.44).
+    """
 
     gap: float
     stiffness: float
-    KEYS = ("gap", "stiffness")
+    kind: str = "unilateral"
+    KEYS = ("gap", "stiffness", "kind")
 
     def __post_init__(self):
         object.__setattr__(self, "gap", _number("foundation.gap", self.gap, lo=0))
         object.__setattr__(self, "stiffness",
                            _number("foundation.stiffness", self.stiffness, lo=0, lo_open=True))
+        object.__setattr__(self, "kind", _choice("foundation.kind", self.kind, FOUNDATION_KINDS))
+
+    @property
+    def bilateral(self) -> bool:
+        return self.kind == "bilateral"
 
 
 @dataclass(frozen=True)

@@ -101,6 +101,10 @@ def solve(scene: Scene, method: str | None = None, *, elements: int | None = Non
         dp, raw = _solve_exact(dp, "newton")
         extra = {"cvm": cvm_verdict_trivial()}
     elif chosen == "cvm":
+        if dp.bilateral:
+            raise SceneError("foundation.kind", "cvm (the thesis's transforms) handles a "
+                             "unilateral foundation; solve a bonded one with newton or convex",
+                             "bilateral")
         opts = scene.solve
         raw = solve_cvm(dp, opts.transform, opts.control, opts.minimizer, opts.bound)
         extra = {"cvm": cvm_verdict(dp, raw)}
@@ -228,7 +232,8 @@ def make_result(dp: DiscreteProblem, raw: dict, method: str, elapsed: float,
         g = -dp.scene.foundation.gap
         # Nodes below the surface (scene-format.md; the thesis's tables count
         # nodes too): every nodal reaction lies in a zone.
-        reaction = dp.k_F * np.maximum(g - w, 0.0)
+        # A bonded foundation's reaction is signed: it pulls where w > g.
+        reaction = dp.k_F * (g - w if dp.bilateral else np.maximum(g - w, 0.0))
         zones = contact_zones(dp.x, w < g)
     elif dp.contact == "obstacle":
         zones, forces, reaction = _obstacle_contact(dp, raw, w)
