@@ -122,7 +122,9 @@ def applied(result):
         force, moment = force + Fk, moment + xk * Fk
     if scene.contact == "foundation":
         xq, wq = _gauss(result.x)
-        p = scene.foundation.stiffness * np.maximum(-scene.foundation.gap - result.deflection(xq), 0)
+        depth = -scene.foundation.gap - result.deflection(xq)
+        bonded = getattr(scene.foundation, "kind", "unilateral") == "bilateral"
+        p = scene.foundation.stiffness * (depth if bonded else np.maximum(depth, 0))
         force, moment = force + wq @ p, moment + wq @ (xq * p)
     elif scene.contact == "obstacle":
         cf = result.contact_forces
@@ -171,6 +173,25 @@ def test_equilibrium_euler_bernoulli(supports, contact):
     scale = scale_of(r)
     assert abs(f_sup + f_app) <= 1e-10 * scale
     assert abs(m_sup + m_app) <= 1e-10 * scale * L
+
+
+@pytest.mark.parametrize("supports", ["P1", "P3", "P4"])
+def test_equilibrium_on_a_bonded_foundation(supports):
+    """A bonded foundation pulls where the beam is above its surface: that counts too."""
+    from gaocvx.scene import Foundation
+
+    if "kind" not in Foundation.KEYS:
+        pytest.skip("no bonded foundation in this tree")
+    d = scene_dict(supports, "euler-bernoulli", length=L, elements=16, **MIXED)
+    d["foundation"] = {"gap": 0.0005, "stiffness": 5e9, "kind": "bilateral"}
+    r = solve(Scene.from_dict(d))
+    assert r.success, r.message
+    xq = _gauss(r.x)[0]
+    assert (r.deflection(xq) > -0.0005).any() and (r.deflection(xq) < -0.0005).any()
+    f_app, m_app = applied(r)
+    f_sup, m_sup = support_resultant(r)
+    assert abs(f_sup + f_app) <= 1e-10 * scale_of(r)
+    assert abs(m_sup + m_app) <= 1e-10 * scale_of(r) * L
 
 
 def test_equilibrium_is_not_vacuous():
