@@ -421,10 +421,13 @@ def sweep_figure(rows: list, key: str, reference: dict | None = None, log: bool 
     fig, axes = plt.subplots(len(series), 1, figsize=(7, 2.7 * len(series) + 0.6), sharex=True,
                              squeeze=False)
     axes = axes[:, 0]
-    p_bar = None
+    limits = {}   # the convexity limits an axial sweep runs into
     if scene is not None and key == "load.axial":
         from .discrete import DiscreteProblem
-        p_bar = DiscreteProblem(scene, check_convexity=False).P_bar_h
+        dp = DiscreteProblem(scene, check_convexity=False)
+        limits["P_bar_h"] = dp.P_bar_h
+        if getattr(dp, "P_hat_h", None) is not None:   # a bonded foundation's limit
+            limits["P_hat_h"] = dp.P_hat_h
     for ax, (label, y, ref_key) in zip(axes, series):
         ax.plot(x, y, "o-", ms=3)
         if ref_key == "contact_length":
@@ -440,9 +443,9 @@ def sweep_figure(rows: list, key: str, reference: dict | None = None, log: bool 
             ax.axhline(reference[ref_key], color="saddlebrown", ls="--",
                        label=reference.get("label", "reference")
                        + (": point contact (length 0)" if point else ""))
-        if p_bar is not None:
-            ax.axvline(p_bar, color="tab:red", ls=":", lw=1.2,
-                       label=f"P_bar_h = {p_bar:.4g} N" if ax is axes[0] else None)
+        for (name, value), style in zip(limits.items(), (":", "-.")):
+            ax.axvline(value, color="tab:red", ls=style, lw=1.2,
+                       label=f"{name} = {value:.4g} N" if ax is axes[0] else None)
         if ax.get_legend_handles_labels()[0]:
             ax.legend(fontsize=8)
         ax.set_ylabel(label)
