@@ -159,7 +159,8 @@ class ConvexProgram:
                          * cp.quad_form(u, cp.psd_wrap(sp.diags(mf.wq5))))
         self.obstacle = None
         if dp.contact is not None and not (dp.bilateral and self.compressed):
-            self.g = param(_level(mf), name="level")
+            level = _level(mf)
+            self.g = param(level, name="level") if np.ndim(level) == 0 else level
         self.bonded_in_form = dp.bilateral and self.compressed
         if self.bonded_in_form:
             # Bonded under compression: c/2 sum w_q (g - w_q)^2 has its quadratic part
@@ -168,18 +169,19 @@ class ConvexProgram:
             # (c g is a product of two parameters, not DPP: such a program is
             # rebuilt for each scene, see set()).
             depth0 = mf.depth(np.zeros(mf.n))
-            wd = mf.wqc * depth0
-            terms.append(-dp.c * ((mf.NqT @ wd) @ z) + 0.5 * dp.c * float(wd @ depth0))
+            cwd = dp.c * mf.wqc * depth0
+            terms.append(-((mf.NqT @ cwd) @ z) + 0.5 * float(cwd @ depth0))
         elif dp.contact == "foundation":
             # c/2 sum w_q pos(g - w_q)^2 = c/2 sum w_q v_q^2 with v >= 0, v >= g - w_q;
             # bonded (bilateral): v = g - w_q.  v keeps the program DPP.
-            self.c = param(dp.c, nonneg=True, name="stiffness")
+            self.c = param(dp.c, nonneg=True, name="stiffness") if np.ndim(dp.c) == 0 else 1.0
+            weights = mf.wqc if np.ndim(dp.c) == 0 else dp.c * mf.wqc   # a stiffness profile
             v = cp.Variable(len(mf.wqc), name="depth")
             if dp.bilateral:
                 constraints.append(v == self.g - mf.Nq @ z)
             else:
                 constraints += [v >= 0, v >= self.g - mf.Nq @ z]
-            terms.append(0.5 * self.c * cp.quad_form(v, cp.psd_wrap(sp.diags(mf.wqc))))
+            terms.append(0.5 * self.c * cp.quad_form(v, cp.psd_wrap(sp.diags(weights))))
         elif dp.contact == "obstacle":
             self.obstacle = mf.A @ z >= self.g
             constraints.append(self.obstacle)
@@ -224,10 +226,11 @@ def _level(mf: MixedForm) -> float:
     deflection scale) the contact term vanishes near the answer, so raising
     the level there does not change the minimiser.
     """
+    g = mf.level if mf.dp.contact == "obstacle" else mf.dp.g   # at the constraint points
     if mf.dp.bilateral:  # a bonded foundation pulls from any distance: g itself
-        return mf.dp.g
+        return g
     # At least one deflection scale below: with no load the bound is 0 (w = 0).
-    return max(mf.dp.g, -max(2.0 * mf.deflection_bound(), 1.0))
+    return np.maximum(g, -max(2.0 * mf.deflection_bound(), 1.0))
 
 
 def _slope_scale(mf: MixedForm) -> float:
@@ -282,7 +285,9 @@ def clear_programs() -> None:
 
 
 def _program(mf: MixedForm, solver: str, reuse: bool) -> tuple[ConvexProgram, bool]:
-    if not reuse:
+    if not reuse or mf.dp.scene.has_profile:
+        # A profile's level and stiffness vary along the beam: they enter as
+        # numbers, and such a program is not reused.
         return ConvexProgram(mf), False
     dp = mf.dp
     # The compressed form depends on p, fixed when the program is built.

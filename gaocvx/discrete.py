@@ -153,7 +153,7 @@ class DiscreteProblem:
         except (OverflowError, FloatingPointError, ZeroDivisionError):
             raise SceneError("scene", "its magnitudes (length, stiffness, loads) cannot be scaled "
                              "within double precision", _magnitudes(scene)) from None
-        scales = [self.W, self.E0, self.p, self.a, self.c, self.g]
+        scales = [self.W, self.E0, self.p, self.a, np.max(self.c), np.min(self.g)]
         if not (np.all(np.isfinite(scales)) and np.all(np.isfinite(self.f)) and self.E0 > 0):
             raise SceneError("scene", "its magnitudes (length, stiffness, loads) cannot be scaled "
                              "within double precision", _magnitudes(scene))
@@ -169,7 +169,9 @@ class DiscreteProblem:
                     raise
                 # A bonded foundation raises the limit to P_hat_h (gaocvx.foundation_limit).
                 from .foundation_limit import BondedLimit
-                if not BondedLimit(self.xi, scene.beam.supports, self.c).prove_below(self.p):
+                # With a stiffness profile its smallest value proves it for all.
+                c_min = float(np.min(self.c))
+                if not BondedLimit(self.xi, scene.beam.supports, c_min).prove_below(self.p):
                     raise SceneError(
                         "load.axial", f"P = {self.P:.4g} N is not provably below the convexity "
                         f"limit P_hat_h = {self.P_hat_h:.4g} N of the beam on its bonded "
@@ -187,7 +189,11 @@ class DiscreteProblem:
             self.x = np.asarray(nodes, float)
         else:
             n_el = scene.mesh.elements if elements is None else int(elements)
-            self.x = fem.uniform_nodes_with_points(L, n_el, [p[0] for p in scene.load.points])
+            # Nodes at point forces, and at the knots of a gap or stiffness profile:
+            # the surface's kinks are then where the constraints and the quadrature
+            # see them (a dent's corner is a constraint point).
+            self.x = fem.uniform_nodes_with_points(
+                L, n_el, [p[0] for p in scene.load.points] + _profile_knots(scene))
         self.xi = self.x / L
         self.n_nodes = len(self.x)
         self.free = fem.free_dofs(self.n_nodes, beam.supports)
@@ -249,7 +255,11 @@ class DiscreteProblem:
         self.bilateral = False  # a bonded foundation: 1/2 c (w - g)^2, pulling too
         if self.contact == "foundation":
             self.k_F = scene.foundation.stiffness
-            self.c = lf * self.k_F * L**4 / EI
+            if isinstance(self.k_F, tuple):
+                # A stiffness profile: c at each contact point.
+                self.c = lf * scene.foundation.stiffness_at(self._contact_points * L) * L**4 / EI
+            else:
+                self.c = lf * self.k_F * L**4 / EI
             self.bilateral = scene.foundation.bilateral
 
     def _set_scale(self, W: float) -> None:
@@ -259,7 +269,28 @@ class DiscreteProblem:
         self.E0 = EI * self.W**2 / L**3
         self.f = self._f_unit / self.W
         self.a = scene.beam.E_alpha_eff * self.W**2 / EI
-        self.g = 0.0 if scene.gap is None else -scene.gap / self.W
+        # The contact level g (<= 0): a number, or with a gap profile its value at
+        # each contact point (the foundation's quadrature points); level_at gives
+        # it anywhere.  g_max, the nearest point of the surface, decides reach.
+        if scene.gap is None:
+            self.g = 0.0
+        elif scene.has_profile and isinstance((scene.foundation or scene.obstacle).gap, tuple):
+            self.g = -scene.gap_at(self._contact_points * self.L) / self.W
+        else:
+            self.g = -scene.gap / self.W
+        self.g_max = 0.0 if scene.gap is None else -scene.gap / self.W
+
+    @functools.cached_property
+    def _contact_points(self) -> np.ndarray:
+        """The contact quadrature points (non-dimensional x), as the mixed form's."""
+        return fem.gauss_points(self.xi, CONTACT_POINTS)[0]
+
+    def level_at(self, xi) -> np.ndarray:
+        """The contact level g (non-dimensional, <= 0) at non-dimensional ``xi``."""
+        xi = np.asarray(xi, float)
+        if self.scene.gap is None:
+            return np.zeros(xi.shape)
+        return -self.scene.gap_at(xi * self.L) / self.W
 
     def rescaled(self, W: float) -> "DiscreteProblem":
         """The same problem measured in the deflection scale ``W`` [m].
@@ -277,7 +308,7 @@ class DiscreteProblem:
     def without_contact(self) -> "DiscreteProblem":
         """The same problem without its foundation or obstacle (for contact out of reach)."""
         new = copy.copy(self)
-        new.contact, new.c, new.g, new.bilateral = None, 0.0, 0.0, False
+        new.contact, new.c, new.g, new.g_max, new.bilateral = None, 0.0, 0.0, 0.0, False
         return new
 
     def penetration(self, depth) -> np.ndarray:
@@ -423,7 +454,7 @@ class DiscreteProblem:
             parts["axial"] = -0.5 * self.p * (self.wq_gao @ s**2)
         if self.contact == "foundation":
             pen = self.penetration(self.g - self.Nq @ u)
-            parts["foundation"] = 0.5 * self.c * (self.wq_c @ pen**2)
+            parts["foundation"] = 0.5 * ((self.c * self.wq_c) @ pen**2)
         return {k: float(v) for k, v in parts.items()}
 
     def energy(self, u) -> float:
@@ -441,7 +472,7 @@ class DiscreteProblem:
             r += (self.a / 3.0) * (self.B1T @ (self.wq_gao * s**3))
         if self.contact == "foundation":
             pen = self.penetration(self.g - self.Nq @ u)
-            r -= self.c * (self.NqT @ (self.wq_c * pen))
+            r -= self.NqT @ (self.c * self.wq_c * pen)
         return r
 
     def hessian(self, u) -> sp.csr_matrix:
@@ -481,6 +512,17 @@ class DiscreteProblem:
         load = math.sqrt(max(self.f @ chol.solve(self.f), 0.0))
         scale = max(math.sqrt(max(u @ (H @ u), 0.0)), load) if load > 0 else 1.0
         return {"stationarity": float(math.sqrt(max(r @ chol.solve(r), 0.0)) / scale)}
+
+
+def _profile_knots(scene: Scene) -> list:
+    """The x of a gap or stiffness table's rows inside the beam."""
+    part = scene.foundation or scene.obstacle
+    knots = []
+    for key in ("gap", "stiffness"):
+        value = getattr(part, key, None)
+        if isinstance(value, tuple):
+            knots += [x for x, _ in value if 0.0 < x < scene.beam.length]
+    return knots
 
 
 def _magnitudes(scene: Scene) -> str:

@@ -121,7 +121,7 @@ class BondedLimit(ConvexityLimit):
 
 def _rayleigh(dp, u) -> float:
     bend = dp.wq2 @ (dp.B2 @ u) ** 2
-    found = dp.c * (dp.wq_c @ (dp.Nq @ u) ** 2)
+    found = (dp.c * dp.wq_c) @ (dp.Nq @ u) ** 2
     axial = dp.wq_gao @ (dp.B1 @ u) ** 2
     return float((bend + found) / axial)
 

@@ -365,14 +365,14 @@ class MixedForm:
         if dp.contact is not None:
             self._depth0 = dp.g - self.Nq @ o
         if dp.contact == "obstacle":
-            self._gap0 = self.A @ o - dp.g
+            self._gap0 = self.A @ o - self.level
 
     @classmethod
     def on_obstacle(cls, dp: DiscreteProblem) -> "MixedForm":
         """The form with its origin at the beam lying flat at the obstacle's level."""
         s = structure_of(dp)
         origin = np.zeros(s.nz)
-        origin[0::3] = dp.g
+        origin[0::3] = dp.level_at(dp.xi)
         return cls(dp, origin[s.free])
 
     def __getattr__(self, name):
@@ -414,6 +414,12 @@ class MixedForm:
         """w' at the 5-point Gauss points."""
         return self.B1 @ z + self._slope0
 
+    @functools.cached_property
+    def level(self):
+        """The obstacle's level g at its constraint points (a number without a profile)."""
+        dp = self.dp
+        return dp.level_at(self.con_points) if dp.scene.has_profile else dp.g
+
     def depth(self, z) -> np.ndarray:
         """g - w at the contact points (positive where the beam is below the level)."""
         return self._depth0 - self.Nq @ z
@@ -439,7 +445,7 @@ class MixedForm:
             parts["axial"] = -0.5 * dp.p * (self.wq5 @ s2)
         if dp.contact == "foundation":
             pen = dp.penetration(self.depth(z))
-            parts["foundation"] = 0.5 * dp.c * (self.wqc @ (pen * pen))
+            parts["foundation"] = 0.5 * ((dp.c * self.wqc) @ (pen * pen))
         return {k: float(v) for k, v in parts.items()}
 
     def gradient(self, z, shift=None, rho=0.0, active=None) -> np.ndarray:
@@ -457,7 +463,7 @@ class MixedForm:
         if dp.contact == "foundation":
             pen = self.depth(z)
             pen = dp.penetration(pen) if active is None else pen * active[0]
-            g -= dp.c * (self.NqT @ (self.wqc * pen))
+            g -= self.NqT @ (dp.c * self.wqc * pen)
         if shift is not None:
             force = shift - rho * self.gap(z)
             force = np.maximum(force, 0.0) if active is None else force * active[1]
@@ -532,7 +538,7 @@ class MixedForm:
     def has_load(self) -> bool:
         """True when any load acts: the load vector is not exactly zero, or a bonded
         foundation's surface lies below the beam (it pulls the beam down to it)."""
-        return bool(np.any(self.f)) or bool(self.dp.bilateral and self.dp.g != 0)
+        return bool(np.any(self.f)) or bool(self.dp.bilateral and np.any(self.dp.g != 0))
 
     @functools.cached_property
     def load_scale(self) -> float:
@@ -580,7 +586,7 @@ class MixedForm:
         dp = self.dp
         if dp.bilateral:  # bonded: it acts at any distance
             return False
-        return dp.contact is not None and dp.g < -2.0 * self.deflection_bound()
+        return dp.contact is not None and dp.g_max < -2.0 * self.deflection_bound()
 
     @property
     def zero_floor(self) -> float:
@@ -627,7 +633,7 @@ class MixedForm:
             # Bonded: the foundation is part of the quadratic form (above P_bar_h
             # it is what keeps that form positive), weighing w itself.
             w = self.Nq @ za
-            norm2 += float(self.dp.c * (self.wqc @ (w * w)))
+            norm2 += float((self.dp.c * self.wqc) @ (w * w))
         elif H.foundation is not None:
             norm2 += float(H.foundation @ self.depth(z) ** 2)
         return math.sqrt(max(norm2, 0.0))

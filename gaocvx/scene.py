@@ -148,6 +148,41 @@ def _pairs(key: str, value) -> list:
     return out
 
 
+def _profile(key: str, value, lo: float, lo_open: bool = False):
+    """A number, or a piecewise-linear table ``[[x, v], ...]`` (a surface profile).
+
+    A table has at least two rows, strictly increasing x, and every value in
+    range; between its rows v is linear, beyond them constant.
+    """
+    value = _plain(value)
+    if not isinstance(value, (list, tuple)):
+        return _number(key, value, lo=lo, lo_open=lo_open)
+    table = _pairs(key, value)
+    if len(table) < 2:
+        raise SceneError(key, "a table needs at least two [x, value] rows", value)
+    for i, (x, v) in enumerate(table):
+        _number(f"{key}[{i}][1]", v, lo=lo, lo_open=lo_open)
+        if i and not x > table[i - 1][0]:
+            raise SceneError(f"{key}[{i}][0]", "table x must be strictly increasing", x)
+    return tuple(table)
+
+
+def profile_at(value, x) -> np.ndarray:
+    """A number or a :func:`_profile` table evaluated at ``x`` (an array)."""
+    x = np.asarray(x, float)
+    if isinstance(value, tuple):
+        xs, vs = zip(*value)
+        return np.interp(x, xs, vs)
+    return np.full(x.shape, float(value))
+
+
+def _check_on_beam(key: str, value, L: float) -> None:
+    if isinstance(value, tuple):
+        for i, (x, _) in enumerate(value):
+            if not 0.0 <= x <= L:
+                raise SceneError(f"{key}[{i}][0]", f"x must lie on the beam [0, {L:g}]", x)
+
+
 def _reject_unknown(section: str, data: Mapping, known) -> None:
     for name in data:
         if name not in known:
@@ -336,10 +371,18 @@ class Foundation:
     KEYS = ("gap", "stiffness", "kind")
 
     def __post_init__(self):
-        object.__setattr__(self, "gap", _number("foundation.gap", self.gap, lo=0))
+        object.__setattr__(self, "gap", _profile("foundation.gap", self.gap, lo=0))
         object.__setattr__(self, "stiffness",
-                           _number("foundation.stiffness", self.stiffness, lo=0, lo_open=True))
+                           _profile("foundation.stiffness", self.stiffness, lo=0, lo_open=True))
         object.__setattr__(self, "kind", _choice("foundation.kind", self.kind, FOUNDATION_KINDS))
+
+    def gap_at(self, x) -> np.ndarray:
+        """The gap [m] at ``x`` (a number or a piecewise-linear table)."""
+        return profile_at(self.gap, x)
+
+    def stiffness_at(self, x) -> np.ndarray:
+        """k_F [N/m^2] at ``x``."""
+        return profile_at(self.stiffness, x)
 
     @property
     def bilateral(self) -> bool:
@@ -354,7 +397,11 @@ class Obstacle:
     KEYS = ("gap",)
 
     def __post_init__(self):
-        object.__setattr__(self, "gap", _number("obstacle.gap", self.gap, lo=0))
+        object.__setattr__(self, "gap", _profile("obstacle.gap", self.gap, lo=0))
+
+    def gap_at(self, x) -> np.ndarray:
+        """The gap [m] at ``x`` (a number or a piecewise-linear table)."""
+        return profile_at(self.gap, x)
 
 
 @dataclass(frozen=True)
@@ -443,6 +490,11 @@ class Scene:
         for i, (x, _) in enumerate(self.load.points):
             if not 0.0 <= x <= L:
                 raise SceneError(f"load.points[{i}][0]", f"x must lie on the beam [0, {L:g}]", x)
+        if self.foundation is not None:
+            _check_on_beam("foundation.gap", self.foundation.gap, L)
+            _check_on_beam("foundation.stiffness", self.foundation.stiffness, L)
+        if self.obstacle is not None:
+            _check_on_beam("obstacle.gap", self.obstacle.gap, L)
 
     # ----------------------------------------------------------------- properties
     @property
@@ -456,8 +508,23 @@ class Scene:
 
     @property
     def gap(self) -> float | None:
+        """The foundation's or obstacle's gap [m]; for a profile, its smallest (the nearest point)."""
         part = self.foundation or self.obstacle
-        return None if part is None else part.gap
+        if part is None:
+            return None
+        return min(v for _, v in part.gap) if isinstance(part.gap, tuple) else part.gap
+
+    @property
+    def has_profile(self) -> bool:
+        """True when the contact's gap or stiffness is a table."""
+        part = self.foundation or self.obstacle
+        return part is not None and any(isinstance(getattr(part, k, None), tuple)
+                                         for k in ("gap", "stiffness"))
+
+    def gap_at(self, x) -> np.ndarray | None:
+        """The gap [m] at ``x`` (None without a foundation or obstacle)."""
+        part = self.foundation or self.obstacle
+        return None if part is None else part.gap_at(x)
 
     # ----------------------------------------------------------------- conversion
     @classmethod

@@ -105,6 +105,11 @@ def solve(scene: Scene, method: str | None = None, *, elements: int | None = Non
             raise SceneError("foundation.kind", "cvm (the thesis's transforms) handles a "
                              "unilateral foundation; solve a bonded one with newton or convex",
                              "bilateral")
+        if scene.has_profile:
+            key = "foundation.gap" if isinstance(scene.foundation.gap, tuple) \
+                else "foundation.stiffness"
+            raise SceneError(key, "cvm (the thesis's transforms) handles a constant gap and "
+                             "stiffness; solve a profile with newton or convex", "a table")
         opts = scene.solve
         raw = solve_cvm(dp, opts.transform, opts.control, opts.minimizer, opts.bound)
         extra = {"cvm": cvm_verdict(dp, raw)}
@@ -229,11 +234,12 @@ def make_result(dp: DiscreteProblem, raw: dict, method: str, elapsed: float,
     parts = {k: v * dp.E0 for k, v in parts.items()}
     zones = reaction = forces = None
     if dp.contact == "foundation":
-        g = -dp.scene.foundation.gap
+        g = -dp.scene.foundation.gap_at(dp.x)
+        k_F = dp.scene.foundation.stiffness_at(dp.x)
         # Nodes below the surface (scene-format.md; the thesis's tables count
         # nodes too): every nodal reaction lies in a zone.
         # A bonded foundation's reaction is signed: it pulls where w > g.
-        reaction = dp.k_F * (g - w if dp.bilateral else np.maximum(g - w, 0.0))
+        reaction = k_F * (g - w if dp.bilateral else np.maximum(g - w, 0.0))
         zones = contact_zones(dp.x, w < g)
     elif dp.contact == "obstacle":
         zones, forces, reaction = _obstacle_contact(dp, raw, w)
@@ -267,7 +273,7 @@ def _obstacle_contact(dp: DiscreteProblem, raw: dict, w) -> tuple:
     touching = (gap <= OBSTACLE_CONTACT_TOL * size) | carrying
     supported = np.setdiff1d(np.arange(dp.n_nodes), dp.free[dp.free % 2 == 0] // 2)
     x = np.r_[mf.con_points * dp.L, dp.x[supported]]
-    flag = np.r_[touching, w[supported] <= -dp.scene.obstacle.gap]
+    flag = np.r_[touching, w[supported] <= -dp.scene.obstacle.gap_at(dp.x[supported])]
     order = np.argsort(x, kind="stable")
     x, flag = x[order], flag[order]
     ends = np.flatnonzero(order >= len(touching))  # the supports among the points

@@ -265,6 +265,6 @@ def verify(scene: Scene, x, w, slope=None, *, reference_elements: int = REFERENC
                       "status": reference.status},
     }
     if scene.contact == "obstacle":
-        out["penetration"] = float(max(-scene.obstacle.gap - ours.min(), 0.0))
+        out["penetration"] = float(max(np.max(-scene.obstacle.gap_at(grid) - ours), 0.0))
     out["exceeded"] = thresholds_exceeded(out, limits["max_gap"], limits["max_error"])
     return out

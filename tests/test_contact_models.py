@@ -22,8 +22,11 @@ BCS = {"P1": [(0, "w"), (0, "slope"), (1, "w"), (1, "slope")],
        "P4": [(0, "w"), (0, "moment"), (1, "w"), (1, "moment")]}
 
 
-def hetenyi(supports, EI, k, q, level, P, L, x):
-    """w(x) of EI w'''' + P w'' + k (w - level) = q with the supports' conditions."""
+def hetenyi(supports, EI, k, q, level, P, L, x, slope=0.0):
+    """w(x) of EI w'''' + P w'' + k (w - level - slope x) = q with the supports' conditions.
+
+    The particular solution is (q + k (level + slope x)) / k: a ramp has no w'' or w''''.
+    """
     roots = np.roots([EI, 0.0, P, 0.0, k]).astype(complex)
     # e^{r (x - x0)} with x0 the end where it is largest: no overflow for stiff foundations
     x0 = np.where(roots.real > 0, L, 0.0)
@@ -31,20 +34,22 @@ def hetenyi(supports, EI, k, q, level, P, L, x):
     def basis(xv, d):
         return roots**d * np.exp(roots * (xv - x0))
 
+    def wp(xv):
+        return (q + k * (level + slope * xv)) / k
+
     rows, rhs = [], []
-    wp = (q + k * level) / k
     for end, what in BCS[supports]:
         xv = end * L
         if what == "w":
-            rows.append(basis(xv, 0)); rhs.append(-wp)
+            rows.append(basis(xv, 0)); rhs.append(-wp(xv))
         elif what == "slope":
-            rows.append(basis(xv, 1)); rhs.append(0.0)
+            rows.append(basis(xv, 1)); rhs.append(-slope)
         elif what == "moment":
             rows.append(basis(xv, 2)); rhs.append(0.0)
         else:
-            rows.append(EI * basis(xv, 3) + P * basis(xv, 1)); rhs.append(0.0)
+            rows.append(EI * basis(xv, 3) + P * basis(xv, 1)); rhs.append(-P * slope)
     C = np.linalg.solve(np.array(rows), np.array(rhs, complex))
-    w = wp + np.array([basis(xv, 0) @ C for xv in np.atleast_1d(x)])
+    w = np.array([wp(xv) + basis(xv, 0) @ C for xv in np.atleast_1d(x)])
     assert np.abs(w.imag).max() <= 1e-9 * np.abs(w.real).max()
     return w.real
 
@@ -126,3 +131,97 @@ def test_p_hat_is_the_continuum_limit():
         exact = min(EI * (n * np.pi) ** 2 + k / (n * np.pi) ** 2 for n in range(1, 200))
         errors = [DiscreteProblem(bonded("P4", n, k=k)).P_hat_h / exact - 1 for n in (16, 32)]
         assert 0 <= errors[1] <= errors[0] and errors[1] <= 1e-4, (k, errors)
+
+
+# ---------------------------------------------------------------- surface profiles
+def _with(contact, supports="P4", n=64, model="euler-bernoulli", q=-5e7):
+    return Scene.from_dict({"beam": {**BEAM, "model": model, "supports": supports},
+                            "load": {"q": q}, **contact, "mesh": {"elements": n}})
+
+
+@pytest.mark.parametrize("supports", ["P1", "P3", "P4"])
+def test_bonded_foundation_on_a_ramp_is_the_closed_form(supports):
+    """A gap rising linearly from 0 to 2 mm (a table): w_p = g(x) + q / k."""
+    contact = {"foundation": {"gap": [[0.0, 0.0], [1.0, 0.002]], "stiffness": 5e10,
+                              "kind": "bilateral"}}
+    EI = _with(contact, supports).beam.EI_eff
+    for method in EXACT:
+        r = solve(_with(contact, supports), method)
+        assert r.success, r.message
+        exact = hetenyi(supports, EI, 5e10, -5e7, 0.0, 0.0, 1.0, r.x, slope=-0.002)
+        assert np.abs(r.w - exact).max() <= 1e-6 * np.abs(exact).max()
+
+
+def test_obstacle_dent_touches_its_corners():
+    """A flat-bottomed dent in the obstacle (a table): the answer lies on or above the
+    profile at every node, touches the dent's corners (which are nodes), and both
+    methods agree."""
+    dent = [[0.0, 5e-4], [0.4, 2e-4], [0.6, 2e-4], [1.0, 5e-4]]
+    obstacle = [solve(_with({"obstacle": {"gap": dent}}, n=40), m) for m in EXACT]
+    for r in obstacle:
+        assert r.success, r.message
+        assert np.any(np.isclose(r.x, 0.4, rtol=0, atol=1e-15))
+        gap = np.interp(r.x, *zip(*dent))
+        assert np.all(r.w >= -gap - 1e-9 * gap.max())
+        ends = np.array([e for z in r.zones for e in z])
+        assert np.abs(ends - 0.4).min() < 1e-12 and np.abs(ends - 0.6).min() < 1e-12
+    w = obstacle[0].w
+    assert np.abs(obstacle[0].w - obstacle[1].w).max() <= 2e-6 * np.abs(w).max()
+
+
+def test_obstacle_ramp_is_the_stiff_foundation_limit():
+    """Thesis remark 2.5: the obstacle is the limit of the unilateral foundation as k_F
+    grows, here with the same ramp profile (the foundation acts at the Gauss points
+    only, the obstacle at the nodes too: the limits agree to O(h) of the contact)."""
+    ramp = [[0.0, 1e-4], [1.0, 4e-4]]
+    w = solve(_with({"obstacle": {"gap": ramp}}, n=40), "newton").w
+    errors = []
+    for k in (1e16, 1e19):
+        r = solve(_with({"foundation": {"gap": ramp, "stiffness": k}}, n=40), "newton")
+        assert r.success
+        errors.append(np.abs(r.w - w).max() / np.abs(w).max())
+    assert errors[1] < errors[0] / 10 and errors[1] <= 1e-4, errors
+
+
+def test_soft_patch_converges():
+    """A soft patch in the foundation (stiffness table 5e10 -> 5e8 -> 5e10): the answer
+    converges under mesh refinement at order >= 3 (Hermite cubics, knots at nodes),
+    sinks deeper over the patch, and both methods agree."""
+    patch = {"foundation": {"gap": 0.0, "stiffness": [[0.0, 5e10], [0.3, 5e10], [0.4, 5e8],
+                                                      [0.6, 5e8], [0.7, 5e10], [1.0, 5e10]]}}
+    fine = solve(_with(patch, n=1024), "newton")
+    assert fine.success
+    errors = []
+    for n in (20, 40, 80):
+        r = solve(_with(patch, n=n), "newton")
+        errors.append(np.abs(r.w - fine.deflection(r.x)).max() / np.abs(fine.w).max())
+    orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all(orders >= 3.0), (errors, orders)
+    assert fine.deflection(0.5) < fine.deflection(0.2) < 0
+    convex = solve(_with(patch, n=80), "convex")
+    assert convex.success and np.abs(convex.w - r.w).max() <= 2e-6 * np.abs(r.w).max()
+
+
+@pytest.mark.parametrize("section, key, value, where", [
+    ("foundation", "gap", [[0.0, 0.001]], "foundation.gap"),
+    ("foundation", "gap", [[0.0, 0.001], [0.0, 0.002]], "foundation.gap[1][0]"),
+    ("foundation", "gap", [[0.0, 0.001], [1.0, -0.002]], "foundation.gap[1][1]"),
+    ("foundation", "stiffness", [[0.0, 1e9], [0.5, 0.0]], "foundation.stiffness[1][1]"),
+    ("obstacle", "gap", [[0.0, 0.001], [2.0, 0.002]], "obstacle.gap[1][0]"),
+    ("obstacle", "gap", [[0.0, "a"], [1.0, 0.002]], "obstacle.gap[0][1]"),
+])
+def test_bad_profiles_name_their_key(section, key, value, where):
+    data = {"beam": {**BEAM, "supports": "P4"}, section: {"gap": 0.001}}
+    if section == "foundation":
+        data[section]["stiffness"] = 1e9
+    data[section][key] = value
+    with pytest.raises(SceneError) as info:
+        Scene.from_dict(data)
+    assert info.value.key == where
+
+
+def test_cvm_refuses_a_profile():
+    scene = _with({"foundation": {"gap": [[0.0, 0.0], [1.0, 0.001]], "stiffness": 1e9}}, n=8)
+    with pytest.raises(SceneError) as info:
+        solve(scene, "cvm")
+    assert info.value.key == "foundation.gap"
