@@ -120,6 +120,8 @@ def _cmd_solve(args) -> int:
     from .solve import solve
 
     overrides = _overrides(args)
+    # "global" is the solve() method of gaocvx.nonconvex, not a scene key's value.
+    method = overrides.pop("solve.method") if overrides.get("solve.method") == "global" else None
     several = len(args.scenes) > 1
     panels = [p.strip() for p in (args.panels or "").split(",") if p.strip()]
     if args.plot:
@@ -133,7 +135,7 @@ def _cmd_solve(args) -> int:
             log.info("%s: solving (%s, supports %s, %d elements, method %s)", path,
                      scene.beam.model, scene.beam.supports, scene.mesh.elements,
                      scene.solve.method)
-            result = solve(scene)
+            result = solve(scene, method)
             record.update(result.to_dict())
             if not result.success:
                 code = EXIT_SOLVER
@@ -373,7 +375,8 @@ def _build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("solve", help="solve one or more scene files")
     p.add_argument("scenes", nargs="+", metavar="SCENE", help="scene file(s) (TOML)")
-    p.add_argument("--method", help="auto | convex | newton | cvm (overrides solve.method)")
+    p.add_argument("--method", help="auto | convex | newton | cvm | global "
+                   "(overrides solve.method)")
     p.add_argument("--solver", help="clarabel | osqp (convex method; overrides solve.solver)")
     p.add_argument("--elements", type=_count, help="number of elements (overrides mesh.elements)")
     p.add_argument("--set", action="append", metavar="KEY=VALUE",

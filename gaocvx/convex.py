@@ -285,7 +285,7 @@ def clear_programs() -> None:
 
 
 def _program(mf: MixedForm, solver: str, reuse: bool) -> tuple[ConvexProgram, bool]:
-    if not reuse or mf.dp.scene.has_profile:
+    if not reuse or mf.dp.scene.has_profile or mf.dp.g_above is not None:
         # A profile's level and stiffness vary along the beam: they enter as
         # numbers, and such a program is not reused.
         return ConvexProgram(mf), False

@@ -279,6 +279,9 @@ class DiscreteProblem:
         else:
             self.g = -scene.gap / self.W
         self.g_max = 0.0 if scene.gap is None else -scene.gap / self.W
+        # A channel: the obstacle's second surface, g_above (>= 0) over the beam.
+        above = scene.obstacle.gap_above if scene.obstacle is not None else None
+        self.g_above = None if above is None else above / self.W
 
     @functools.cached_property
     def _contact_points(self) -> np.ndarray:
@@ -309,6 +312,7 @@ class DiscreteProblem:
         """The same problem without its foundation or obstacle (for contact out of reach)."""
         new = copy.copy(self)
         new.contact, new.c, new.g, new.g_max, new.bilateral = None, 0.0, 0.0, 0.0, False
+        new.g_above = None
         return new
 
     def penetration(self, depth) -> np.ndarray:

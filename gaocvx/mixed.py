@@ -122,9 +122,11 @@ class MixedStructure:
             xq, self.wqc, e = fem.gauss_points(x, CONTACT_POINTS)
             self.Nq = matrix(xq, e, 0)
             self.NqT = self.Nq.T.tocsr()
-        if contact == "obstacle":
+        if contact in ("obstacle", "channel"):
             # w >= g at the nodes (the variables w_i themselves) and at the Gauss
             # points, as the convex program; rows that touch no free DOF are dropped.
+            # A channel adds w <= g_above on the same points: the rows again, negated
+            # (multipliers >= 0 each; the force on the beam is lam_below - lam_above).
             nodes = sp.csr_matrix((np.ones(N + 1), (np.arange(N + 1), 3 * np.arange(N + 1))),
                                   shape=(N + 1, self.nz))[:, self.free]
             A = sp.vstack([nodes, self.Nq]).tocsr()
@@ -136,6 +138,12 @@ class MixedStructure:
             # The same rows on the full Hermite DOFs: multipliers -> consistent nodal forces.
             self.A_hermite = sp.vstack([fem.eval_matrix(x, x, 0),
                                         fem.eval_matrix(x, xq, 0, e)]).tocsr()[keep]
+            self.n_below = len(keep)   # rows of the surface below; the rest: above
+            if contact == "channel":
+                self.A = sp.vstack([self.A, -self.A]).tocsr()
+                self.AT = self.A.T.tocsr()
+                self.A_hermite = sp.vstack([self.A_hermite, -self.A_hermite]).tocsr()
+                self.con_points = np.r_[self.con_points, self.con_points]
         # Linking constraint rows: w_{e+1} - w_e - h_e D_e = 0.
         h = np.diff(x)
         e = np.arange(N)
@@ -158,7 +166,8 @@ class MixedStructure:
         # Every term couples only the variables of one element (and C its two
         # nodes), so the union of their patterns bounds the band.
         quads = [self.B2] + ([self.B1] if self.has_slope else []) \
-            + ([self.Nq] if self.contact else []) + ([self.A] if self.contact == "obstacle" else [])
+            + ([self.Nq] if self.contact else []) \
+            + ([self.A] if self.contact in ("obstacle", "channel") else [])
         bw = 0
         for B in quads:
             B = B.tocsr()
@@ -277,7 +286,8 @@ def clear_cache() -> None:
 
 def structure_key(dp: DiscreteProblem) -> tuple:
     """What a :class:`MixedStructure` depends on: supports, mesh, and the terms present."""
-    return (dp.scene.beam.supports, dp.xi.tobytes(), bool(dp.needs_gao or dp.p != 0), dp.contact)
+    contact = "channel" if dp.contact == "obstacle" and dp.g_above is not None else dp.contact
+    return (dp.scene.beam.supports, dp.xi.tobytes(), bool(dp.needs_gao or dp.p != 0), contact)
 
 
 def structure_of(dp: DiscreteProblem) -> MixedStructure:
@@ -372,7 +382,10 @@ class MixedForm:
         """The form with its origin at the beam lying flat at the obstacle's level."""
         s = structure_of(dp)
         origin = np.zeros(s.nz)
-        origin[0::3] = dp.level_at(dp.xi)
+        if dp.g_above is not None and dp.g_above < -dp.g_max:
+            origin[0::3] = dp.g_above   # a channel whose upper surface is the nearer
+        else:
+            origin[0::3] = dp.level_at(dp.xi)
         return cls(dp, origin[s.free])
 
     def __getattr__(self, name):
@@ -416,9 +429,14 @@ class MixedForm:
 
     @functools.cached_property
     def level(self):
-        """The obstacle's level g at its constraint points (a number without a profile)."""
+        """The obstacle's level g at its constraint points (a number without a profile or
+        channel); a channel's upper rows carry -g_above (their rows are -A: -w >= -g_above)."""
         dp = self.dp
-        return dp.level_at(self.con_points) if dp.scene.has_profile else dp.g
+        if dp.g_above is None:
+            return dp.level_at(self.con_points) if dp.scene.has_profile else dp.g
+        m = self.n_below
+        return np.r_[dp.level_at(self.con_points[:m]), np.full(len(self.con_points) - m,
+                                                                 -dp.g_above)]
 
     def depth(self, z) -> np.ndarray:
         """g - w at the contact points (positive where the beam is below the level)."""
@@ -586,7 +604,9 @@ class MixedForm:
         dp = self.dp
         if dp.bilateral:  # bonded: it acts at any distance
             return False
-        return dp.contact is not None and dp.g_max < -2.0 * self.deflection_bound()
+        bound = 2.0 * self.deflection_bound()
+        above = dp.g_above is None or dp.g_above > bound   # a channel's upper surface too
+        return dp.contact is not None and dp.g_max < -bound and above
 
     @property
     def zero_floor(self) -> float:

@@ -338,6 +338,12 @@ class Result:
             lines.append("supports " + "; ".join(
                 f"x = {s['x']:.4g} m: {s['force']:.6g} N, {s['moment']:.6g} N m"
                 for s in self.support_reactions))
+        glob = self.extra.get("global")
+        if glob:  # the global method's certificate (gaocvx.nonconvex)
+            lines.append(f"global   {glob['unstable_modes']} unstable mode(s), certified gap "
+                         f"{glob['bound_gap']:.3g} J, {glob['nodes']} nodes"
+                         + ("" if glob["unique"] else
+                            f", NOT unique ({len(glob.get('alternatives', [])) + 1} minimisers)"))
         verdict = self.extra.get("cvm", {}).get("verdict")
         if verdict:  # CVM's status is about its own problem; this is about the beam
             lines.append(f"verdict  {verdict}")

@@ -391,13 +391,21 @@ class Foundation:
 
 @dataclass(frozen=True)
 class Obstacle:
-    """Rigid obstacle (Signorini contact): gap [m] >= 0 below the undeformed beam."""
+    """Rigid obstacle (Signorini contact): gap [m] >= 0 below the undeformed beam.
+
+    ``gap_above`` (optional, >= 0): a second rigid surface that far above the
+    beam, w <= gap_above on the same points (a beam in a channel).
+    """
 
     gap: float
-    KEYS = ("gap",)
+    gap_above: float | None = None
+    KEYS = ("gap", "gap_above")
 
     def __post_init__(self):
         object.__setattr__(self, "gap", _profile("obstacle.gap", self.gap, lo=0))
+        if self.gap_above is not None:
+            object.__setattr__(self, "gap_above",
+                               _number("obstacle.gap_above", self.gap_above, lo=0))
 
     def gap_at(self, x) -> np.ndarray:
         """The gap [m] at ``x`` (a number or a piecewise-linear table)."""

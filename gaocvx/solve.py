@@ -47,15 +47,19 @@ CVM_FULL_GAP = 1e-8
 log = logging.getLogger(__name__)
 
 
-def choose_method(scene: Scene, method: str | None = None) -> str:
+def choose_method(scene: Scene, method: str | None = None, elements: int | None = None) -> str:
     """The method that ``method`` (default: the scene's) resolves to.
 
     ``auto`` is the fastest exact method for every scene kind: Newton (one
     banded solve when the energy is quadratic; the method of multipliers for a
-    rigid obstacle).
+    rigid obstacle), and the certified global method (:mod:`gaocvx.nonconvex`)
+    when the axial force is not provably below ``P_bar_h`` of the mesh.
     """
     method = method or scene.solve.method
-    return "newton" if method == "auto" else method
+    if method == "auto":
+        from .nonconvex import above_limit
+        return "global" if above_limit(scene, elements) else "newton"
+    return method
 
 
 def solve(scene: Scene, method: str | None = None, *, elements: int | None = None,
@@ -66,8 +70,9 @@ def solve(scene: Scene, method: str | None = None, *, elements: int | None = Non
     Parameters
     ----------
     scene : Scene
-    method : {"auto", "convex", "newton"}, optional
-        Overrides ``scene.solve.method``.
+    method : {"auto", "convex", "newton", "cvm", "global"}, optional
+        Overrides ``scene.solve.method``.  ``"global"``: the certified global
+        minimiser, also above ``P_bar_h`` (:mod:`gaocvx.nonconvex`).
     elements : int, optional
         Overrides ``scene.mesh.elements``.
     solver : {"clarabel", "osqp"}, optional
@@ -88,11 +93,15 @@ def solve(scene: Scene, method: str | None = None, *, elements: int | None = Non
         If the method returns no solution at all.  A solution that fails its
         optimality test is returned with ``status == "inaccurate"``.
     """
-    scene = check_solve_arguments(scene, method, elements, solver)
+    # "global" (gaocvx.nonconvex) is checked here, not among the scene's METHODS.
+    scene = check_solve_arguments(scene, None if method == "global" else method, elements, solver)
     t0 = time.perf_counter()
-    if method is not None and method not in METHODS:
+    if method is not None and method not in (*METHODS, "global"):
         raise SceneError("solve.method", "must be one of " + ", ".join(map(repr, METHODS)), method)
-    chosen = choose_method(scene, method)
+    chosen = choose_method(scene, method, elements)
+    if chosen == "global":
+        from .nonconvex import solve_global_result
+        return solve_global_result(scene, elements=elements, problem=problem, solver=solver)
     extra = None
     dp = problem if problem is not None else DiscreteProblem(scene, elements=elements)
     solver = solver or scene.solve.solver
@@ -261,7 +270,8 @@ def _obstacle_contact(dp: DiscreteProblem, raw: dict, w) -> tuple:
     carry a force; zones are the runs of consecutive such points, so a beam
     touching between two nodes has a zone there, and one point alone is a
     point contact [x, x].  A support at the obstacle's level (gap 0) counts
-    only where the contact continues into the span.
+    only where the contact continues into the span.  In a channel, forces from
+    the surface above are negative (they push down).
     """
     mf, lam, z = raw["mixed"], raw["lam"], raw["z"]
     to_newton = dp.E0 / dp.W / dp.scene.beam.load_factor  # multiplier -> force [N]
@@ -271,16 +281,26 @@ def _obstacle_contact(dp: DiscreteProblem, raw: dict, w) -> tuple:
     # of a beam that lifts off are ~1e-13 of it, not zero.
     carrying = lam > 1e-9 * max(float(np.sum(np.abs(mf.f))), float(np.sum(np.abs(lam))), 1e-300)
     touching = (gap <= OBSTACLE_CONTACT_TOL * size) | carrying
+    signed = lam.copy()
+    points = mf.con_points
     supported = np.setdiff1d(np.arange(dp.n_nodes), dp.free[dp.free % 2 == 0] // 2)
-    x = np.r_[mf.con_points * dp.L, dp.x[supported]]
-    flag = np.r_[touching, w[supported] <= -dp.scene.obstacle.gap_at(dp.x[supported])]
+    at_support = w[supported] <= -dp.scene.obstacle.gap_at(dp.x[supported])
+    if dp.g_above is not None:
+        # A channel: the upper surface's rows follow the lower's, on the same
+        # points; a point is in contact with either, its force is signed.
+        m = mf.n_below
+        touching, carrying = touching[:m] | touching[m:], carrying[:m] | carrying[m:]
+        signed, points = lam[:m] - lam[m:], points[:m]
+        at_support |= w[supported] >= dp.scene.obstacle.gap_above
+    x = np.r_[points * dp.L, dp.x[supported]]
+    flag = np.r_[touching, at_support]
     order = np.argsort(x, kind="stable")
     x, flag = x[order], flag[order]
     ends = np.flatnonzero(order >= len(touching))  # the supports among the points
     neighbour = np.r_[flag[1:], False] | np.r_[False, flag[:-1]]
     flag[ends] &= neighbour[ends]
     zones = contact_zones(x, flag)
-    forces = np.column_stack([mf.con_points[carrying] * dp.L, lam[carrying] * to_newton])
+    forces = np.column_stack([points[carrying] * dp.L, signed[carrying] * to_newton])
     force = mf.A_hermite.T @ lam  # consistent nodal forces, non-dimensional
     return zones, forces[np.argsort(forces[:, 0])], force[0::2] * to_newton
 

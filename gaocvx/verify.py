@@ -266,5 +266,8 @@ def verify(scene: Scene, x, w, slope=None, *, reference_elements: int = REFERENC
     }
     if scene.contact == "obstacle":
         out["penetration"] = float(max(np.max(-scene.obstacle.gap_at(grid) - ours), 0.0))
+        if scene.obstacle.gap_above is not None:
+            out["penetration"] = max(out["penetration"],
+                                     float(max(np.max(ours) - scene.obstacle.gap_above, 0.0)))
     out["exceeded"] = thresholds_exceeded(out, limits["max_gap"], limits["max_error"])
     return out

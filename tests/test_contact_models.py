@@ -225,3 +225,48 @@ def test_cvm_refuses_a_profile():
     with pytest.raises(SceneError) as info:
         solve(scene, "cvm")
     assert info.value.key == "foundation.gap"
+
+
+# ---------------------------------------------------------------- a channel (gap_above)
+@pytest.mark.parametrize("model", ["euler-bernoulli", "gao"])
+def test_channel_upper_surface_is_the_mirror_of_the_lower(model):
+    """w -> -w maps a beam lifted onto a surface g above to one pressed onto a surface g
+    below: the channel's upper constraint against the plain obstacle, both methods."""
+    lower = solve(_with({"obstacle": {"gap": 2e-4}}, model=model, n=32, q=-5e8), "newton")
+    for method in EXACT:
+        upper = solve(_with({"obstacle": {"gap": 0.01, "gap_above": 2e-4}}, model=model,
+                            n=32, q=5e8), method)
+        assert upper.success and lower.success, upper.message
+        assert np.abs(upper.w + lower.w).max() <= 2e-6 * np.abs(lower.w).max()
+        assert upper.w.max() <= 2e-4 * (1 + 1e-7)
+        # the same forces, pushing down (nodal reactions; the total)
+        assert upper.contact_forces[:, 1].min() < 0 <= -upper.contact_forces[:, 1].min()
+        # (nodal reactions of a contact zone's multipliers are not unique: an
+        # interior-point answer spreads them differently; Newton is the same method)
+        scale = np.abs(lower.reaction).max()
+        tol = 1e-5 if method == "newton" else 1e-3
+        assert np.abs(upper.reaction + lower.reaction).max() <= tol * scale
+        total = lower.contact_forces[:, 1].sum()
+        assert abs(upper.contact_forces[:, 1].sum() + total) <= 1e-6 * abs(total)
+
+
+def test_channel_holds_both_ways():
+    """Forces up and down in a channel: the beam touches below near the downward force
+    (an upward reaction) and above near the upward one (a downward reaction); a
+    zero-width channel holds it at w = 0."""
+    B = {**BEAM, "supports": "P4"}
+    data = {"beam": B, "load": {"points": [[0.3, -6e7], [0.7, 6e7]]},
+            "obstacle": {"gap": 0.001, "gap_above": 0.0005}, "mesh": {"elements": 32}}
+    for method in EXACT:
+        r = solve(Scene.from_dict(data), method)
+        assert r.success, r.message
+        assert r.w.min() >= -0.001 * (1 + 1e-7) and r.w.max() <= 0.0005 * (1 + 1e-7)
+        F = r.contact_forces
+        assert np.all(F[F[:, 0] < 0.5, 1] > 0) and np.all(F[F[:, 0] > 0.5, 1] < 0)
+    data["obstacle"] = {"gap": 0.0, "gap_above": 0.0}
+    r = solve(Scene.from_dict(data), "newton")
+    assert r.success and np.abs(r.w).max() <= 1e-12
+    bad = {**data, "obstacle": {"gap": 0.0, "gap_above": -1e-3}}
+    with pytest.raises(SceneError) as info:
+        Scene.from_dict(bad)
+    assert info.value.key == "obstacle.gap_above"

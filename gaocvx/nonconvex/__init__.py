@@ -1,0 +1,18 @@
+"""Beyond the convexity limit: certified global minimisers and all equilibria.
+
+Above ``P_bar_h`` the discrete energy is convex except along the k unstable
+buckling modes (``../shared/spec/nonconvex.md``, docs/nonconvex.md):
+
+``modes``      the k unstable modes of (K, mu G), G-normalised
+``bounds``     the box of mode amplitudes containing every minimiser; refusal
+               of energies unbounded below
+``node``       the convex node programs (dense CVXPY + Clarabel, DPP)
+``bnb``        branch and bound with a certified gap
+``minimum``    the global minimiser, polished and certified
+``api``        ``solve(scene, "global")``'s results
+"""
+
+from .api import above_limit, solve_global_result
+from .modes import unstable_modes
+
+__all__ = ["above_limit", "solve_global_result", "unstable_modes"]

@@ -1,0 +1,123 @@
+"""Results of the global method: the glue between :mod:`.minimum` and :mod:`gaocvx.solve`.
+
+``solve(scene, "global")`` lands in :func:`solve_global_result`; ``auto``
+picks the global method exactly when :func:`above_limit` says the energy is
+not provably convex on the scene's mesh.
+
+Examples
+--------
+>>> from gaocvx import Scene, solve
+>>> scene = Scene.from_dict({"beam": {"model": "gao", "supports": "P4", "length": 1.0,
+...     "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1, "width": 1.0},
+...     "load": {"axial": 1.3e9}, "mesh": {"elements": 16}})
+>>> r = solve(scene)                    # auto: above P_bar_h, so "global"
+>>> r.method, r.status, r.extra["global"]["unique"]      # q = 0: two mirror images
+('global', 'optimal', False)
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+
+import numpy as np
+
+from ..discrete import DiscreteProblem
+from ..errors import SceneError
+
+__all__ = ["above_limit", "provably_convex", "solve_global_result"]
+
+log = logging.getLogger(__name__)
+
+# Branch and bound splits a k-dimensional box: beyond a few modes the number of
+# node programs explodes (measured: 1 mode ~50 nodes, 2 modes ~500).
+MAX_MODES = 3
+# The continuum P_bar lies below P_bar_h (Rayleigh-Ritz); below this fraction of it
+# no mesh needs a look (EFFECTIVE_LENGTH of P2 is 2e-6 off the exact root).
+_CONTINUUM_MARGIN = 1e-4
+
+
+def provably_convex(dp) -> bool:
+    """True when ``P < P_bar_h`` is proved on the mesh of ``dp`` (:func:`gaocvx.limit.check`)."""
+    if not dp.P > 0:
+        return True
+    from .. import limit
+    try:
+        limit.check(dp)
+    except SceneError:
+        return False
+    return True
+
+
+def above_limit(scene, elements=None) -> bool:
+    """True when the scene's axial force is not provably below ``P_bar_h`` of its mesh."""
+    P = scene.load.axial
+    if not P > 0 or P < scene.beam.P_bar() * (1.0 - _CONTINUUM_MARGIN):
+        return False
+    return not provably_convex(DiscreteProblem(scene, elements=elements, check_convexity=False))
+
+
+def _statement(dp) -> str:
+    """What the convex methods say of a P at or above the limit (gaocvx.limit's words)."""
+    beam = dp.scene.beam
+    return (f"P = {dp.P:.4g} N is not below the convexity limit P_bar_h = {dp.P_bar_h:.4g} N "
+            f"for {beam.supports} (continuum P_bar = {beam.P_bar():.4g} N)")
+
+
+def _physical(dp, u) -> dict:
+    w, slope = dp.to_physical(u)
+    i, j = int(np.argmin(w)), int(np.argmax(w))
+    return {"w": w.tolist(), "slope": slope.tolist(),
+            "min": {"w": float(w[i]), "x": float(dp.x[i])},
+            "max": {"w": float(w[j]), "x": float(dp.x[j])}}
+
+
+def solve_global_result(scene, elements=None, problem=None, solver=None):
+    """Solve ``scene`` by the global method and return its :class:`~gaocvx.result.Result`.
+
+    Below ``P_bar_h`` (k = 0) the answer is the convex ground truth (CVXPY +
+    Clarabel, or OSQP if ``solver`` says so), with ``extra["global"]``
+    saying k = 0.  Above, see :func:`.minimum.solve_global`.
+
+    Raises
+    ------
+    SceneError
+        For scenes without a minimiser (energy unbounded below) or too fine a mesh.
+    """
+    from ..solve import _solve_exact, make_result
+    from .bounds import check_bounded
+    from .minimum import MAX_ELEMENTS, solve_global
+    from .modes import unstable_modes
+
+    t0 = time.perf_counter()
+    if problem is not None:
+        dp = problem
+    else:
+        dp = DiscreteProblem(scene, elements=elements, check_convexity=False)
+    if provably_convex(dp):
+        dp, raw = _solve_exact(dp, "convex", solver or "clarabel")
+        info = {"unstable_modes": 0, "mode_loads": [], "bound_gap": 0.0, "unique": True,
+                "nodes": 1}
+        return make_result(dp, raw, "global", time.perf_counter() - t0, extra={"global": info})
+    check_bounded(dp)
+    n_el = dp.n_nodes - 1
+    if n_el > MAX_ELEMENTS:
+        raise SceneError("load.axial", f"{_statement(dp)}; above it the global method's dense "
+                         f"node programs take at most {MAX_ELEMENTS} elements "
+                         f"(mesh.elements = {n_el})", dp.P)
+    modes = unstable_modes(dp)
+    if modes.k > MAX_MODES:
+        raise SceneError("load.axial", f"{_statement(dp)}, with {modes.k} unstable buckling modes; "
+                         f"the global method's branch and bound takes at most {MAX_MODES}", dp.P)
+    if modes.k == 0:
+        # Not provably below the limit, yet the eigen-solve puts lambda_1 a hair above
+        # P (within round-off): the first mode is treated as unstable (c_1 ~ 0).
+        modes = unstable_modes(dp, min_k=1)
+    dp, raw, info = solve_global(dp, modes)
+    alternatives = [{"energy": a["energy"], "amplitudes": a["amplitudes"], **_physical(dp, a["u"])}
+                    for a in info.pop("alternatives")]
+    info["alternatives"] = alternatives
+    if alternatives:
+        raw["message"] += (f"; not unique: {len(alternatives) + 1} minimisers within the "
+                           "certified gap (mirror images), all in extra['global']['alternatives']")
+    return make_result(dp, raw, "global", time.perf_counter() - t0, extra={"global": info})

@@ -1,0 +1,164 @@
+"""Branch and bound over the unstable modes' amplitudes.
+
+Each box ``[lo, hi]`` of amplitudes gets the lower bound of its node program
+(:class:`.node.NodeProgram`, the concave part replaced by its chord) and
+contributes an upper bound, the true energy at the program's minimiser.
+The box with the smallest lower bound is split at its midpoint along the
+coordinate with the largest chord error ``c_i (hi_i - lo_i)^2 / 4``; boxes
+whose lower bound lies within ``tol`` of the best upper bound are closed.
+The chord error on a box bounds the gap between its bounds, so the bounds
+meet.  The search stops when the best upper bound minus the smallest lower
+bound of every leaf (open or closed) is at most ``tol``, or when every box
+left is so small that its chord error is below ``tol / 100`` (the remaining
+gap is then the node solver's accuracy): the difference is the
+certificate, a global optimality gap, whatever stopped the search.
+
+Examples
+--------
+A one-dimensional toy: ``F(s) = s^4 - s^2`` on [-2, 2] (minimum -1/4 at
+``s = +-1/sqrt 2``), with exact convex node problems ``min s^4 + chord``:
+
+>>> import numpy as np
+>>> from types import SimpleNamespace
+>>> class Toy:
+...     modes = SimpleNamespace(c=np.array([1.0]))
+...     def solve_box(self, lo, hi):
+...         grid = np.linspace(lo[0], hi[0], 2001)
+...         val = grid**4 - (lo[0] + hi[0]) * grid + lo[0] * hi[0]
+...         i = int(np.argmin(val))
+...         return SimpleNamespace(lower=float(val[i]) - 1e-6, s=grid[i:i+1], u=grid[i:i+1],
+...                                lam=None, ok=True)
+>>> out = branch_and_bound(Toy(), lambda u: float(u[0]**4 - u[0]**2), [-2.0], [2.0], tol=1e-4)
+>>> round(out.upper, 4), out.gap <= 1e-4
+(-0.25, True)
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import logging
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["Leaf", "BnBResult", "branch_and_bound"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class Leaf:
+    """A box of amplitudes with its node program's answer."""
+
+    lower: float
+    lo: np.ndarray
+    hi: np.ndarray
+    s: np.ndarray | None
+    u: np.ndarray | None
+    ok: bool
+
+
+@dataclass
+class BnBResult:
+    """The outcome of :func:`branch_and_bound` (non-dimensional energies).
+
+    ``upper`` is the best energy found (at ``u``, amplitudes ``s``), ``lower``
+    the smallest lower bound of any leaf, ``gap = upper - lower`` the
+    certificate; ``leaves`` are the final boxes, ``nodes`` the node programs
+    solved, ``failed`` those the solver did not report optimal among the leaves.
+    """
+
+    upper: float
+    lower: float
+    u: np.ndarray
+    s: np.ndarray
+    lam: object
+    nodes: int
+    leaves: list = field(repr=False)
+    converged: bool = True
+    failed: int = 0
+
+    @property
+    def gap(self) -> float:
+        return self.upper - self.lower
+
+
+def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
+                     start=None) -> BnBResult:
+    """Minimise the energy over the box ``[lo, hi]`` of amplitudes, to a certified gap ``tol``.
+
+    Parameters
+    ----------
+    prog : NodeProgram
+        ``prog.solve_box(lo, hi)`` returns a node's ``lower``, ``s``, ``u``,
+        ``lam`` and ``ok``; ``prog.modes.c`` are the concave coefficients.
+    energy : callable
+        The true (non-dimensional) energy of free DOFs ``u``.
+    lo, hi : array_like
+        A box that contains every global minimiser.
+    tol : float
+        The gap at which to stop.
+    max_nodes : int
+        Node programs at most (the result then has ``converged = False``).
+    start : tuple, optional
+        ``(energy, u, s, lam)`` of a known feasible point (an upper bound).
+    """
+    c = np.asarray(prog.modes.c, float)
+    best = list(start) if start is not None else [math.inf, None, None, None]
+    counter = itertools.count()
+    nodes = 0
+
+    def evaluate(lo, hi, parent):
+        nonlocal nodes
+        sol = prog.solve_box(lo, hi)
+        nodes += 1
+        if sol.u is not None:
+            e = energy(sol.u)  # inf for a point that is not feasible
+            if e < best[0]:
+                best[:] = [e, sol.u, sol.s, sol.lam]
+        if sol.ok:
+            # A child lies inside its parent: the parent's bound holds for it too.
+            return Leaf(max(sol.lower, parent.lower), lo, hi, sol.s, sol.u, True)
+        # A solve that is not optimal proves nothing: the parent's bound stands
+        # (and is split further if it matters).
+        return Leaf(parent.lower, lo, hi, sol.s, sol.u, parent.ok)
+
+    root = evaluate(np.asarray(lo, float), np.asarray(hi, float),
+                    Leaf(-math.inf, None, None, None, None, False))
+    open_ = [(root.lower, next(counter), root)]
+    closed = []
+    converged = True
+    while open_:
+        lower, _, leaf = open_[0]
+        if best[0] - lower <= tol:
+            break
+        if nodes >= max_nodes:
+            converged = False
+            break
+        heapq.heappop(open_)
+        width = leaf.hi - leaf.lo
+        if float(np.sum(c * width**2)) / 4.0 <= 1e-2 * tol:
+            # The chord is exact to far below tol here: what is left of this box's
+            # gap is the node solver's own accuracy, which splitting cannot reduce.
+            closed.append(leaf)
+            continue
+        i = int(np.argmax(c * width**2))
+        mid = 0.5 * (leaf.lo[i] + leaf.hi[i])
+        for a, b in ((leaf.lo[i], mid), (mid, leaf.hi[i])):
+            clo, chi = leaf.lo.copy(), leaf.hi.copy()
+            clo[i], chi[i] = a, b
+            child = evaluate(clo, chi, leaf)
+            if child.lower > best[0] - tol:
+                closed.append(child)
+            else:
+                heapq.heappush(open_, (child.lower, next(counter), child))
+    leaves = closed + [item[2] for item in open_]
+    lower = min(leaf.lower for leaf in leaves)
+    frontier = [leaf for leaf in leaves if leaf.lower <= best[0]]
+    failed = sum(not leaf.ok for leaf in frontier)
+    log.info("branch and bound: %d nodes, upper %.12g, lower %.12g, %d leaves", nodes, best[0],
+             lower, len(leaves))
+    return BnBResult(best[0], min(lower, best[0]), best[1], best[2], best[3], nodes, leaves,
+                     converged, failed)

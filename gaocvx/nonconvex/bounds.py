@@ -1,0 +1,103 @@
+"""A box in the mode amplitudes that contains every global minimiser.
+
+With ``t = u'G u = ∫ (w')^2`` (non-dimensional, L = 1) the 5-point Gauss rule
+integrates ``(w')^4`` exactly, so by Cauchy-Schwarz the Gao term is at least
+``a/12 t^2``; the bending and load terms are at least ``-c0``,
+``c0 = f'K^-1 f / 2``, and a foundation costs nothing negative.  Hence
+(nonconvex.md)::
+
+    Pi(u) >= a/12 t^2 - p/2 t - c0,
+
+and a minimiser has ``Pi <= U`` for any feasible energy ``U`` (0 at w = 0,
+admissible since gaps are >= 0).  That bounds ``t``, and the amplitudes
+``s = Phi'G u`` satisfy ``|s|^2 <= t`` (G-orthogonal split).
+
+Without the quartic term (Euler-Bernoulli, or ``E_alpha = 0``) nothing bounds
+the energy from below above ``P_bar_h``: the beam can buckle away from a
+unilateral foundation or an obstacle without limit.  Such a scene has no
+minimiser and is refused.
+
+Examples
+--------
+>>> t_max(a=12.0, p=2.0, c0=0.0, upper=0.0)      # t^2 - t <= 0
+1.0
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import SceneError
+
+__all__ = ["t_max", "amplitude_box", "check_bounded"]
+
+
+def t_max(a: float, p: float, c0: float, upper: float) -> float:
+    """The largest ``t >= 0`` with ``a/12 t^2 - p/2 t - c0 <= upper`` (``a > 0``)."""
+    A, B, C = a / 12.0, p / 2.0, c0 + upper
+    if C < 0:  # the upper bound lies below the energy's lower bound at every t >= 0 ...
+        C = 0.0  # ... only through round-off; the larger root then still bounds t
+    return float((B + math.sqrt(B * B + 4.0 * A * C)) / (2.0 * A))
+
+
+def check_bounded(dp) -> None:
+    """Refuse a scene whose energy is unbounded below above ``P_bar_h``.
+
+    Raises
+    ------
+    SceneError
+        On ``load.axial`` when the quartic Gao term is absent (``a == 0``).
+    """
+    if dp.a > 0:
+        return
+    model = dp.scene.beam.model
+    why = ("the Euler-Bernoulli energy" if model != "gao" else "this Gao beam (E_alpha = 0)")
+    held = {"foundation": "a unilateral foundation cannot stop the beam buckling upwards",
+            "obstacle": "an obstacle cannot stop the beam buckling upwards"}.get(
+        dp.contact, "nothing stops the buckling amplitude")
+    raise SceneError("load.axial", f"P = {dp.P:.4g} N is at or above the convexity limit "
+                     f"P_bar_h = {dp.P_bar_h:.4g} N, where {why} has no quartic term and is "
+                     f"unbounded below ({held}): there is no minimiser", dp.P)
+
+
+def load_constant(dp) -> float:
+    """``c0 = f'K^-1 f / 2`` (non-dimensional): minus the minimum of the bending-plus-load energy."""
+    if dp.n == 0 or not np.any(dp.f):
+        return 0.0
+    return 0.5 * float(dp.f @ dp._K_chol.solve(dp.f))
+
+
+def amplitude_box(dp, k: int, upper: float = 0.0, lam1: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """The box ``[-S, S]^k`` of mode amplitudes containing every point with ``Pi <= upper``.
+
+    Besides the bound of the module's notes, part of the bending energy can pay
+    for the axial term: for ``0 <= theta < 1``,
+    ``1/2 u'K u - f'u >= theta/2 u'K u - c0/(1 - theta)`` and
+    ``u'K u >= lambda_1 t``, so ``Pi >= a/12 t^2 - (p - theta lambda_1)/2 t -
+    c0/(1 - theta)``.  Near ``lambda_1`` without load this shrinks the box by
+    ``sqrt(p / (p - lambda_1))`` (measured: 122 to 4 at P = 1.001 lambda_1);
+    the smallest ``t`` over a few ``theta`` is taken.
+
+    Parameters
+    ----------
+    dp : DiscreteProblem
+        With ``a > 0`` (see :func:`check_bounded`).
+    k : int
+        Number of unstable modes.
+    upper : float
+        A feasible energy (non-dimensional); 0, the energy of w = 0, by default.
+    lam1 : float
+        A lower bound of the smallest eigenvalue of ``(K, G)`` (0: not used).
+
+    Returns
+    -------
+    lo, hi : ndarray
+    """
+    c0 = load_constant(dp)
+    thetas = [0.0] if lam1 <= 0 else [0.0] + [1.0 - 10.0**-j for j in range(1, 13)]
+    S = math.sqrt(min(t_max(dp.a, dp.p - th * lam1, c0 / (1.0 - th), upper) for th in thetas))
+    # A relative margin: the bound is exact, but its inputs carry round-off.
+    S *= 1.0 + 1e-9
+    return -S * np.ones(k), S * np.ones(k)
