@@ -157,26 +157,42 @@ class DiscreteProblem:
         if not (np.all(np.isfinite(scales)) and np.all(np.isfinite(self.f)) and self.E0 > 0):
             raise SceneError("scene", "its magnitudes (length, stiffness, loads) cannot be scaled "
                              "within double precision", _magnitudes(scene))
-        if check_convexity and self.P > 0:
-            # One banded factorisation proves P < P_bar_h when P is clear of the
-            # limit by more than its round-off margin; nearer, the enclosure of
-            # P_bar_h decides, and a P inside it is refused (gaocvx.limit).
-            from . import limit
-            try:
-                limit.check(self)
-            except SceneError:
-                if not self.bilateral:
-                    raise
-                # A bonded foundation raises the limit to P_hat_h (gaocvx.foundation_limit).
-                from .foundation_limit import BondedLimit
-                # With a stiffness profile its smallest value proves it for all.
-                c_min = float(np.min(self.c))
-                if not BondedLimit(self.xi, scene.beam.supports, c_min).prove_below(self.p):
-                    raise SceneError(
-                        "load.axial", f"P = {self.P:.4g} N is not provably below the convexity "
-                        f"limit P_hat_h = {self.P_hat_h:.4g} N of the beam on its bonded "
-                        f"foundation (P_bar_h = {self.P_bar_h:.4g} N without it)",
-                        self.P) from None
+        if check_convexity:
+            self.check_convexity()
+
+    def check_convexity(self) -> None:
+        """Raise :class:`SceneError` on ``load.axial`` unless the energy is proved convex.
+
+        One banded factorisation proves P < P_bar_h when P is clear of the limit
+        by more than its round-off margin; nearer, the enclosure of P_bar_h
+        decides, and a P inside it is refused (:mod:`gaocvx.limit`).  A bonded
+        foundation raises the limit to P_hat_h (:mod:`gaocvx.foundation_limit`).
+        """
+        if not self.P > 0:
+            return
+        from . import limit
+        try:
+            limit.check(self)
+        except SceneError:
+            if not self.bilateral:
+                raise
+            from .foundation_limit import BondedLimit
+            # With a stiffness profile its smallest value proves it for all.
+            c_min = float(np.min(self.c))
+            if not BondedLimit(self.xi, self.scene.beam.supports, c_min).prove_below(self.p):
+                raise SceneError(
+                    "load.axial", f"P = {self.P:.4g} N is not provably below the convexity "
+                    f"limit P_hat_h = {self.P_hat_h:.4g} N of the beam on its bonded "
+                    f"foundation (P_bar_h = {self.P_bar_h:.4g} N without it)",
+                    self.P) from None
+
+    def convexity_proved(self) -> bool:
+        """True when :meth:`check_convexity` passes."""
+        try:
+            self.check_convexity()
+        except SceneError:
+            return False
+        return True
 
     def _build(self, scene, elements, nodes, W_fixed):
         self.scene = scene

@@ -39,14 +39,9 @@ _CONTINUUM_MARGIN = 1e-4
 
 def provably_convex(dp) -> bool:
     """True when ``P < P_bar_h`` is proved on the mesh of ``dp`` (:func:`gaocvx.limit.check`)."""
-    if not dp.P > 0:
-        return True
-    from .. import limit
-    try:
-        limit.check(dp)
-    except SceneError:
-        return False
-    return True
+    # The discrete problem's own proof: P < P_bar_h, or below a bonded
+    # foundation's P_hat_h.
+    return dp.convexity_proved()
 
 
 def above_limit(scene, elements=None) -> bool:
