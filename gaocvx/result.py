@@ -115,6 +115,12 @@ class Result:
                  (time.perf_counter() - t0) * 1e3)
         return value
 
+    @functools.cached_property
+    def P_hat(self) -> float | None:
+        """A bonded foundation's convexity limit P_hat_h [N] (thesis (2.44)); None otherwise."""
+        value = getattr(self.problem, "P_hat_h", None)
+        return None if value is None else float(value)
+
     @property
     def success(self) -> bool:
         """True when the status is "optimal" and nothing says the answer is far from the minimiser.
@@ -310,6 +316,7 @@ class Result:
             },
             "support_reactions": self.support_reactions,
             "P_bar": float(self.P_bar),
+            **({} if self.P_hat is None else {"P_hat": self.P_hat}),
             "time_s": float(self.time_s),
             "iterations": self.nit,
             "solver": self.solver,
@@ -331,6 +338,8 @@ class Result:
             f"energy   {self.energy:.6g} J",
             f"P_bar_h  {self.P_bar:.6g} N",
         ]
+        if self.P_hat is not None:
+            lines.append(f"P_hat_h  {self.P_hat:.6g} N (bonded foundation)")
         if self.zones is not None:
             zones = ", ".join(f"[{a:.4g}, {b:.4g}]" for a, b in self.zones) or "none"
             lines.append(f"contact  {zones}")

@@ -270,3 +270,13 @@ def test_channel_holds_both_ways():
     with pytest.raises(SceneError) as info:
         Scene.from_dict(bad)
     assert info.value.key == "obstacle.gap_above"
+
+
+def test_p_hat_is_reported():
+    """JSON and summary carry P_hat for a bonded foundation only."""
+    r = solve(bonded("P4", 16), "newton")
+    d = r.to_dict()
+    assert d["P_hat"] == pytest.approx(DiscreteProblem(bonded("P4", 16)).P_hat_h, rel=1e-12)
+    assert d["P_hat"] > d["P_bar"] and "P_hat_h" in r.summary()
+    unilateral = solve(_with({"foundation": {"gap": 0.0, "stiffness": 5e10}}, n=16), "newton")
+    assert "P_hat" not in unilateral.to_dict()
