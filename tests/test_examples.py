@@ -91,3 +91,51 @@ def test_every_example_is_covered():
     assert len(names) >= 6
     text = Path(__file__).read_text()
     assert all(name in text for name in names)
+
+
+def test_bonded_rail_compressed_is_hetenyis():
+    """Between P_bar_h and P_hat: the closed form of EI w'''' + P w'' + k w = q."""
+    from test_contact_models import hetenyi
+    r = run("bonded_rail_compressed.toml")
+    exact = hetenyi("P4", EI_THESIS, 5e10, -5e7, 0.0, 4e9, 1.0, r.x)
+    assert np.abs(r.w - exact).max() <= 1e-6 * np.abs(exact).max()
+    assert r.min["w"] == pytest.approx(-2.610e-3, rel=1e-3) and r.min["x"] == 0.5
+    assert r.P_bar < 4e9 < r.P_hat
+    assert r.P_hat == pytest.approx(np.pi**2 * EI_THESIS + 5e10 / np.pi**2, rel=1e-6)
+
+
+def test_obstacle_dent_is_a_beam_on_two_props():
+    """Touching the corners only: the closed form of the beam with two point forces R
+    at 0.4 and 0.6 chosen so that w(0.4) = -0.2 mm (linear in R)."""
+    r = run("obstacle_dent.toml")
+    free = ExactBeam("P4", 1.0, EI_THESIS, -5e7)
+    unit = ExactBeam("P4", 1.0, EI_THESIS, 0.0, [(0.4, 1.0), (0.6, 1.0)])
+    R = (-2e-4 - free(np.array([0.4]))[0]) / unit(np.array([0.4]))[0]
+    exact = ExactBeam("P4", 1.0, EI_THESIS, -5e7, [(0.4, R), (0.6, R)])
+    assert np.abs(r.w - exact(r.x)).max() <= 1e-9 * np.abs(r.w).max()
+    assert r.zones == [[0.4, 0.4], [0.6, 0.6]]
+    assert r.contact_forces[:, 1] == pytest.approx([R, R], rel=1e-6)
+    assert R == pytest.approx(1.5857e7, rel=1e-4)
+
+
+def test_channel_touches_below_and_above():
+    """Touching each surface at one point: the closed form of the beam with its two
+    loads and two contact forces, at the contact points, chosen so that it touches
+    -1 mm and +0.5 mm there (a 2x2 linear system)."""
+    r = run("channel.toml")
+    assert len(r.x) - 1 == 34 and r.w.min() >= -1e-3 * (1 + 1e-7)
+    assert r.w.max() <= 5e-4 * (1 + 1e-7)
+    (x1, F1), (x2, F2) = r.contact_forces
+    loads = [(0.3, -6e7), (0.7, 6e7)]
+    base = ExactBeam("P4", 1.0, EI_THESIS, 0.0, loads)
+    at = np.array([x1, x2])
+    cols = [ExactBeam("P4", 1.0, EI_THESIS, 0.0, [(x, 1.0)])(at) for x in (x1, x2)]
+    R = np.linalg.solve(np.column_stack(cols), np.array([-1e-3, 5e-4]) - base(at))
+    exact = ExactBeam("P4", 1.0, EI_THESIS, 0.0, loads + [(x1, R[0]), (x2, R[1])])
+    # A contact force between nodes is not one the Hermite FEM represents exactly
+    # (its discretisation error, O(h^4), is ~3e-6 here; the props at nodes above
+    # agree to round-off).
+    assert [F1, F2] == pytest.approx(R, rel=2e-5)
+    assert R[0] == pytest.approx(1.470e7, rel=1e-3) and R[1] == pytest.approx(-1.947e7, rel=1e-3)
+    assert np.abs(r.deflection(np.linspace(0, 1, 201)) - exact(np.linspace(0, 1, 201))).max() \
+        <= 2e-5 * 1e-3
