@@ -71,6 +71,8 @@ class Energy:
         self.p, self.a, self.c, self.g = float(S.p), float(S.a), float(S.c), float(S.g)
         self.f = np.asarray(S.f, float)[bp.free]
         self.foundation = bp.contact == "foundation"
+        # a bonded foundation pulls too: 1/2 c (g - w)^2 everywhere
+        self.bonded = self.foundation and scene.foundation.bilateral
         self.E0 = S.E0
 
     def __call__(self, x):
@@ -79,7 +81,8 @@ class Energy:
         e = 0.5 * x @ Kx - 0.5 * self.p * x @ Gx + self.a / 12 * self.wq @ s**4 - self.f @ x
         g = Kx - self.p * Gx + self.a / 3 * self.D.T @ (self.wq * s**3) - self.f
         if self.foundation:
-            pen = np.maximum(self.g - self.N @ x, 0.0)
+            pen = self.g - self.N @ x
+            pen = pen if self.bonded else np.maximum(pen, 0.0)
             e += 0.5 * self.c * self.wq @ pen**2
             g -= self.c * self.N.T @ (self.wq * pen)
         return e, g
@@ -88,7 +91,7 @@ class Energy:
         s = self.D @ x
         H = self.K - self.p * self.G + self.a * self.D.T @ ((self.wq * s**2)[:, None] * self.D)
         if self.foundation:
-            act = (self.g - self.N @ x > 0).astype(float)
+            act = np.ones(len(self.wq)) if self.bonded else (self.g - self.N @ x > 0).astype(float)
             H = H + self.c * self.N.T @ ((self.wq * act)[:, None] * self.N)
         return H
 
@@ -188,9 +191,14 @@ def test_near_the_first_mode_load_the_amplitude_follows_the_one_mode_estimate():
     ("P1", dict(q=-5e7, axial=1.1e10, elements=8)),          # k = 2
     ("P3", dict(q=None, points=[(1.0, -1e5)], axial=4e8, elements=8)),
     ("P2", dict(q=-2e7, axial=3e9, foundation=(0.002, 1e10), elements=8)),
+    ("P4", dict(q=-1e7, axial=3e9, foundation=(0.0, 1e9), elements=8, bonded=True)),
 ])
 def test_no_local_search_finds_anything_below_the_certified_minimum(supports, kw):
-    scene = Scene.from_dict(scene_dict(supports, **kw))
+    bonded = kw.pop("bonded", False)
+    d = scene_dict(supports, **kw)
+    if bonded:  # above the bonded beam's own limit P_hat_h
+        d["foundation"]["kind"] = "bilateral"
+    scene = Scene.from_dict(d)
     r = solve(scene, "global")
     glob = r.extra["global"]
     assert r.status == "optimal" and glob["unstable_modes"] >= 1
@@ -263,13 +271,25 @@ def test_obstacle_holding_a_buckled_beam():
     assert best == pytest.approx(r.energy, rel=1e-6)
 
 
+def test_channel_holds_the_buckled_beam_against_its_upper_surface():
+    d = scene_dict("P4", q=-1e7, axial=1.5e9, obstacle=0.01, elements=16)
+    d["obstacle"]["gap_above"] = 0.02
+    r = solve(Scene.from_dict(d))
+    assert r.method == "global" and r.status == "optimal", r.message
+    # free, it buckles more than 0.05 m down (with the load); the channel's floor
+    # stops that at 0.01 m, and it buckles up against the ceiling instead
+    assert r.max["w"] == pytest.approx(0.02, rel=1e-9) and r.min["w"] >= -0.01
+    free = solve(Scene.from_dict(scene_dict("P4", q=-1e7, axial=1.5e9, elements=16)))
+    assert free.min["w"] < -0.05 and free.energy < r.energy
+
+
 # --------------------------------------------------------------------- refusals
 def test_euler_bernoulli_above_its_limit_is_refused_with_the_reason(tmp_path, capsys):
     d = scene_dict("P4", model="euler-bernoulli", q=-1e7, axial=1.5e9, elements=8)
     with pytest.raises(SceneError, match="unbounded below"):
         solve(Scene.from_dict(d), "global")
     d["obstacle"] = {"gap": 0.01}
-    with pytest.raises(SceneError, match="obstacle cannot stop"):
+    with pytest.raises(SceneError, match="obstacle below cannot stop"):
         solve(Scene.from_dict(d))  # auto picks global, which refuses
     path = tmp_path / "eb.toml"
     path.write_text('[beam]\nmodel = "euler-bernoulli"\nsupports = "P4"\nlength = 1.0\n'

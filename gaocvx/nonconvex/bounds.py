@@ -54,12 +54,26 @@ def check_bounded(dp) -> None:
         return
     model = dp.scene.beam.model
     why = ("the Euler-Bernoulli energy" if model != "gao" else "this Gao beam (E_alpha = 0)")
-    held = {"foundation": "a unilateral foundation cannot stop the beam buckling upwards",
-            "obstacle": "an obstacle cannot stop the beam buckling upwards"}.get(
-        dp.contact, "nothing stops the buckling amplitude")
-    raise SceneError("load.axial", f"P = {dp.P:.4g} N is at or above the convexity limit "
-                     f"P_bar_h = {dp.P_bar_h:.4g} N, where {why} has no quartic term and is "
-                     f"unbounded below ({held}): there is no minimiser", dp.P)
+    limit = f"the convexity limit P_bar_h = {dp.P_bar_h:.4g} N"
+    if dp.contact == "foundation" and getattr(dp, "bilateral", False):
+        held = "its bonded foundation holds it only up to P_hat_h"
+        limit = f"the bonded beam's convexity limit P_hat_h = {dp.P_hat_h:.4g} N"
+    elif dp.contact == "foundation":
+        held = "a unilateral foundation cannot stop the beam buckling upwards"
+    elif dp.contact == "obstacle" and getattr(dp, "g_above", None) is None:
+        held = "an obstacle below cannot stop the beam buckling upwards"
+    elif dp.contact == "obstacle":
+        # A channel bounds w, but not the slopes: the axial term -p/2 ∫ (w')^2
+        # falls without bound along ever shorter waves between its surfaces.  On a
+        # mesh the waves are cut off at the element size, so the discrete energy
+        # has a minimiser, but one set by the mesh alone: refused all the same.
+        held = ("a channel bounds the deflection but not the slopes: ever shorter waves fit "
+                "in it, and any discrete minimiser would be the mesh's, not the beam's")
+    else:
+        held = "nothing stops the buckling amplitude"
+    raise SceneError("load.axial", f"P = {dp.P:.4g} N is at or above {limit}, where {why} has "
+                     f"no quartic term and is unbounded below ({held}): there is no minimiser",
+                     dp.P)
 
 
 def load_constant(dp) -> float:

@@ -40,7 +40,7 @@ from ..discrete import complementarity
 __all__ = ["psi_certificate"]
 
 
-def psi_certificate(dp, modes, u, lam, rows) -> dict:
+def psi_certificate(dp, modes, u, lam, rows, levels=None) -> dict:
     """Optimality measures of free Hermite DOFs ``u`` in the metric of the convex part ``Psi``.
 
     Parameters
@@ -53,6 +53,8 @@ def psi_certificate(dp, modes, u, lam, rows) -> dict:
         Obstacle multipliers (rows of ``rows``).
     rows : sparse matrix or None
         The obstacle's constraint rows on the free DOFs.
+    levels : ndarray, optional
+        The obstacle's level at each row.
 
     Returns
     -------
@@ -65,7 +67,7 @@ def psi_certificate(dp, modes, u, lam, rows) -> dict:
     if lam is not None:
         r = r - rows.T @ lam
     GPhi = np.asarray(dp.G @ modes.phi)
-    H = dp.hessian(u)
+    H = dp.hessian(u)  # (a bonded foundation's c M included)
     H = H.toarray() if hasattr(H, "toarray") else np.asarray(H)
     H = H + 2.0 * (GPhi * modes.c) @ GPhi.T
     try:
@@ -75,7 +77,7 @@ def psi_certificate(dp, modes, u, lam, rows) -> dict:
     scale = math.sqrt(max(float(u @ (H @ u)), 0.0)) or 1.0
     out = {"stationarity": math.sqrt(max(float(r @ la.cho_solve(factor, r)), 0.0)) / scale}
     if lam is not None:
-        gap = rows @ u - dp.g
+        gap = rows @ u - levels
         size = max(float(np.max(np.abs(u[dp._w_rows()]), initial=0.0)), 1e-300)
         lam_scale = float(np.max(np.abs(lam), initial=0.0)) or 1.0
         out.update(feasibility=float(max(-np.min(gap, initial=0.0), 0.0) / size),
@@ -84,7 +86,7 @@ def psi_certificate(dp, modes, u, lam, rows) -> dict:
     return out
 
 
-def contact_polish(dp, u, lam, rows, max_iter: int = 12):
+def contact_polish(dp, u, lam, rows, levels, max_iter: int = 12):
     """Newton on the energy with the obstacle's touching rows as equalities.
 
     A node program's answer meets the optimality conditions only to its solver's
@@ -101,8 +103,9 @@ def contact_polish(dp, u, lam, rows, max_iter: int = 12):
     -------
     u, lam : ndarray
     """
-    gap = rows @ u - dp.g
-    size = max(float(np.max(np.abs(u[dp._w_rows()]), initial=0.0)), abs(dp.g), 1e-300)
+    gap = rows @ u - levels
+    size = max(float(np.max(np.abs(u[dp._w_rows()]), initial=0.0)),
+               float(np.max(np.abs(levels))), 1e-300)
     # Touching as in the certificate (TOUCH_TOL), or carrying a force that is not
     # the solver's round-off (interior-point multipliers of rows 6e-6 off the
     # obstacle were 1e-9 of the largest, and as equalities made the rows inconsistent).
@@ -118,13 +121,13 @@ def contact_polish(dp, u, lam, rows, max_iter: int = 12):
         g = dp.gradient(x)
         H = dp.hessian(x).toarray()
         kkt = np.block([[H, -A.T], [A, np.zeros((m, m))]])
-        rhs = np.r_[-(g - A.T @ mult), -(A @ x - dp.g)]
+        rhs = np.r_[-(g - A.T @ mult), -(A @ x - levels[act])]
         step = la.lstsq(kkt, rhs, cond=1e-14)[0]
         x = x + step[:n]
         mult = mult + step[n:]
         if np.linalg.norm(step[:n]) <= 1e-15 * max(np.linalg.norm(x), 1e-300):
             break
-    new_gap = rows @ x - dp.g
+    new_gap = rows @ x - levels
     if (np.all(np.isfinite(x)) and np.min(new_gap) >= -1e-12 * size and np.min(mult) >= 0
             and dp.energy(x) <= e0 + 1e-12 * max(abs(e0), 1.0)):
         out = np.zeros_like(lam)

@@ -148,8 +148,8 @@ def _feasible_energy(dp, prog):
         return dp.energy
 
     def energy(u):
-        gap = prog.rows @ u - dp.g
-        size = max(float(np.max(np.abs(u))), abs(dp.g), 1e-300)
+        gap = prog.rows @ u - prog.levels
+        size = max(float(np.max(np.abs(u))), float(np.max(np.abs(prog.levels))), 1e-300)
         return dp.energy(u) if np.min(gap, initial=0.0) >= -1e-9 * size else math.inf
 
     return energy
@@ -207,14 +207,15 @@ def _polish(dp, prog, s, u, lam, lo, hi):
         if sol.ok and sol.u is not None and dp.energy(sol.u) <= e + slack:
             s, u, lam = sol.s, sol.u, sol.lam
         if lam is not None:
-            u, lam = contact_polish(dp, u, lam, prog.rows)
+            u, lam = contact_polish(dp, u, lam, prog.rows, prog.levels)
     polished = _newton_polish(dp, u)
     if dp.contact != "obstacle":
         return s, polished, lam
     # With an obstacle, Newton without it serves when the beam lifts off
     # everywhere: the answer stays feasible and its multipliers are zero.
-    gap = prog.rows @ polished - dp.g
-    if np.min(gap, initial=np.inf) > 1e-9 * max(float(np.max(np.abs(polished))), abs(dp.g)) \
+    gap = prog.rows @ polished - prog.levels
+    reach = max(float(np.max(np.abs(polished))), float(np.max(np.abs(prog.levels))))
+    if np.min(gap, initial=np.inf) > 1e-9 * reach \
             and dp.energy(polished) <= dp.energy(u):
         return s, polished, np.zeros(prog.rows.shape[0])
     return s, u, lam
@@ -316,7 +317,7 @@ def _run(dp, modes, max_nodes, t0):
     if dp.contact == "obstacle":
         # An obstacle may hold the beam against its unstable modes, where the
         # energy's Hessian is indefinite: measured in the convex part's metric.
-        residual = psi_certificate(dp, modes, mf.to_hermite(z), lam, prog.rows)
+        residual = psi_certificate(dp, modes, mf.to_hermite(z), lam, prog.rows, prog.levels)
     else:
         residual = certify(mf, z, lam)
     parts = mf.energy_parts(z)

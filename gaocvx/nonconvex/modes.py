@@ -74,7 +74,9 @@ class Modes:
 
 def _pencil(dp, count):
     """The ``count`` smallest eigenpairs of the dense pencil (K, G), G-normalised."""
-    K = dp.K.toarray()
+    from .node import effective_stiffness
+
+    K = effective_stiffness(dp).toarray()
     G = dp.G.toarray()
     count = min(count, dp.n)
     vals, vecs = la.eigh(K, G, subset_by_index=[0, count - 1])

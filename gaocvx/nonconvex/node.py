@@ -77,16 +77,37 @@ CLARABEL_SETTINGS = [dict(tol_gap_abs=1e-12, tol_gap_rel=1e-12, tol_feas=1e-10, 
 INACCURATE_GAP = 5e-5
 
 
-def obstacle_rows(dp) -> sp.csr_matrix:
-    """``w`` at the nodes and the foundation's Gauss points, on the free Hermite DOFs.
+def obstacle_rows(dp) -> tuple[sp.csr_matrix, np.ndarray]:
+    """Obstacle rows ``A u >= levels``: ``w`` at the nodes and the foundation's Gauss points.
 
     Rows touching no free DOF (a support at the obstacle's level) are dropped,
     as in :class:`gaocvx.mixed.MixedStructure`, whose constraint rows these are.
+    The level (non-dimensional, <= 0) is the obstacle's at each row's point (a
+    gap profile varies along the beam).
     """
     A = sp.vstack([fem.eval_matrix(dp.xi, dp.xi, 0)[:, dp.free], dp.Nq]).tocsr()
     A.eliminate_zeros()
     keep = np.flatnonzero(np.diff(A.indptr) > 0)
-    return A[keep].tocsr()
+    levels = np.r_[dp.level_at(dp.xi), np.broadcast_to(dp.g, (dp.Nq.shape[0],))]
+    A, levels = A[keep].tocsr(), np.asarray(levels[keep], float)
+    if getattr(dp, "g_above", None) is not None:
+        # A channel: w <= g_above on the same points, as -w >= -g_above, stacked
+        # after the rows below (the mixed form's order: multipliers >= 0 each).
+        A = sp.vstack([A, -A]).tocsr()
+        levels = np.r_[levels, np.full(len(levels), -dp.g_above)]
+    return A, levels
+
+
+def effective_stiffness(dp) -> sp.csr_matrix:
+    """The quadratic form that the modes diagonalise: bending, plus a bonded foundation's c M.
+
+    A bonded foundation's ``1/2 ∫ c (w - g)^2`` is quadratic: its ``c M`` part
+    belongs with the bending (nonconvex.md), its linear part with the load.
+    """
+    if dp.contact == "foundation" and dp.bilateral:
+        weights = np.broadcast_to(dp.c * dp.wq_c, dp.wq_c.shape)
+        return (dp.K + dp.NqT @ sp.diags(weights) @ dp.Nq).tocsr()
+    return dp.K
 
 
 class NodeSolution:
@@ -133,9 +154,9 @@ class NodeProgram:
         lam1 = float(modes.lam[0])
         rho = (modes.lam_next - lam1) if math.isfinite(modes.lam_next) else (dp.p - lam1) + 1.0
         rho = max(rho, 1.01 * (dp.p - lam1) + 1e-12)
-        A = (dp.K - dp.p * dp.G).toarray() + rho * (GPhi @ GPhi.T)
+        A = (effective_stiffness(dp) - dp.p * dp.G).toarray() + rho * (GPhi @ GPhi.T)
         self.A_rho = 0.5 * (A + A.T)
-        self.rows = obstacle_rows(dp) if dp.contact == "obstacle" else None
+        self.rows, self.levels = obstacle_rows(dp) if dp.contact == "obstacle" else (None, None)
         self.solves = 0
 
         # Box program.
@@ -169,12 +190,17 @@ class NodeProgram:
             cons.append(cp.square(dp.B1 @ u) <= y)
             terms.append(dp.a / 12.0 * cp.quad_form(y, sp.diags(dp.wq_gao)))
         obs = None
-        if dp.contact == "foundation":
+        weights = np.broadcast_to(dp.c * dp.wq_c, dp.wq_c.shape) if dp.contact else None
+        if dp.contact == "foundation" and dp.bilateral:
+            # c M is in A_rho (effective_stiffness); what is left is linear in u.
+            g = np.broadcast_to(dp.g, dp.wq_c.shape)
+            terms.append(-((dp.NqT @ (weights * g)) @ u) + 0.5 * float(weights @ g**2))
+        elif dp.contact == "foundation":
             t = cp.Variable(len(dp.wq_c), name="t", nonneg=True)
             cons.append(t >= dp.g - dp.Nq @ u)
-            terms.append(0.5 * dp.c * cp.quad_form(t, sp.diags(dp.wq_c)))
+            terms.append(0.5 * cp.quad_form(t, sp.diags(weights)))
         elif dp.contact == "obstacle":
-            obs = self.rows @ u >= dp.g
+            obs = self.rows @ u >= self.levels
             cons.append(obs)
         return s, v, cp.sum(terms), cons, obs
 
