@@ -36,14 +36,15 @@ mesh (for T3 vanishing at both ends, U_ad^0); ``"full"``, the whole discrete
 load space of the state (every discrete state is reachable, so the CVM
 optimum is the convex minimiser: the consistency check).
 
-Minimisers: ``"conditional-gradient"`` (the thesis's) and
-``"projected-newton"`` (Bertsekas's projected Newton method with the exact
-reduced Hessian ``S' H S``).
+Minimisers (:mod:`gaocvx.cvm_minimizers`): ``"conditional-gradient"`` (the
+thesis's) and ``"projected-newton"`` (Bertsekas's projected Newton method,
+matrix-free: CG on the exact reduced Hessian ``S' H S``, preconditioned by its
+bending part).  The accurate linear algebra both rely on is in
+:mod:`gaocvx.cvm_algebra`.
 """
 
 from __future__ import annotations
 
-import copy
 import math
 import time
 
@@ -54,6 +55,7 @@ import scipy.sparse.linalg as spla
 from . import fem
 from .discrete import DiscreteProblem
 from .errors import SceneError
+from .cvm_algebra import BendingSolver, nonlinear_gradient, nonlinear_hessian, saddle_inverse
 from .cvm_minimizers import conditional_gradient, projected_newton
 from .linalg import BandedCholesky
 
@@ -122,72 +124,6 @@ def moment_load(dp: DiscreteProblem, x) -> np.ndarray:
     for xk, Fk in pts:
         G = G - Fk * np.maximum(x - xk, 0.0)
     return G
-
-
-# ------------------------------------------------------------------ accurate building blocks
-def nonlinear_gradient(dp: DiscreteProblem, U) -> np.ndarray:
-    """Gradient of the Gao, axial and foundation energies at free Hermite DOFs U.
-
-    From slopes and deflections at quadrature points, never as
-    ``grad Pi - (K U - f)``: K U cancels terms of size N^3, which would put
-    ~N^4 eps of noise into the controls' gradient on fine meshes.
-    """
-    r = np.zeros(dp.n)
-    if dp.needs_gao or dp.p:
-        s = dp.B1 @ U
-        r += dp.B1T @ (dp.wq_gao * ((dp.a / 3.0) * s**3 - dp.p * s))
-    if dp.contact == "foundation":
-        pen = np.maximum(dp.g - dp.Nq @ U, 0.0)
-        r -= dp.c * (dp.NqT @ (dp.wq_c * pen))
-    return r
-
-
-def nonlinear_hessian(dp: DiscreteProblem, U) -> sp.csr_matrix:
-    """(Generalised) Hessian of the Gao, axial and foundation energies at U; banded.
-
-    The beam's Hessian is ``K + nonlinear_hessian``; kept apart so that K is
-    never applied to a state (see :func:`nonlinear_gradient`).
-    """
-    H = sp.csr_matrix((dp.n, dp.n))
-    if dp.needs_gao or dp.p:
-        s = dp.B1 @ U
-        H = H + dp.B1T @ sp.diags(dp.wq_gao * (dp.a * s**2 - dp.p)) @ dp.B1
-    if dp.contact == "foundation":
-        active = (dp.g - dp.Nq @ U) > 0
-        H = H + dp.NqT @ sp.diags(dp.c * dp.wq_c * active) @ dp.Nq
-    return H.tocsr()
-
-
-class BendingSolver:
-    """Solves ``K U = b`` with the Hermite bending matrix K in well-conditioned variables.
-
-    K has condition number ~N^4: a banded Cholesky solve loses ~N^4 eps
-    (1e-4 of a cantilever's tip deflection at 2048 elements, everything at
-    16384).  The same system in the mixed variables of :mod:`gaocvx.mixed`
-    (deflections, slopes, chord slopes; an exact re-parametrisation of the
-    Hermite space) has only first differences and is solved by one banded LU
-    of its KKT matrix, factored once per mesh and shared with the ground
-    truth's solver.
-    """
-
-    def __init__(self, dp: DiscreteProblem):
-        from .mixed import MixedForm
-        flat = copy.copy(dp)
-        flat.p = 0.0  # K alone, without the axial part
-        self.mf = MixedForm(flat)
-        self.factor = self.mf.quadratic_factor
-        self.dp = dp
-
-    def solve(self, b) -> np.ndarray:
-        """``K^-1 b`` for a load vector b on the free Hermite DOFs."""
-        dp, mf = self.dp, self.mf
-        F = np.zeros(2 * dp.n_nodes)
-        F[dp.free] = b
-        fz = np.zeros(mf.nz)
-        fz[0::3] = F[0::2]  # the load acts on the deflections and slopes only
-        fz[1::3] = F[1::2]
-        z, _ = self.factor.solve(fz[mf.free], np.zeros(mf.N))
-        return mf.to_hermite(z)
 
 
 # ------------------------------------------------------------------ transforms
@@ -305,7 +241,7 @@ class _T1(_Transform):
 
     def bending_preconditioner(self, free):
         # S'KS = B'K^-1 K K^-1 B = B'K^-1 B
-        return _saddle_inverse(self.dp.K, self.B[:, np.flatnonzero(free)])
+        return self.chol.saddle_inverse(self.B[:, np.flatnonzero(free)])
 
     def apply_ST(self, y):
         return self.B.T @ self.chol.solve(y)
@@ -366,7 +302,7 @@ class _T2(_Transform):
 
     def bending_preconditioner(self, free):
         # w = ∫ z exactly, so the bending energy is ½ z'Ez and S'KS = Bz'E^-1 Bz.
-        return _saddle_inverse(self.E, self.Bz[:, np.flatnonzero(free)])
+        return saddle_inverse(self.E, self.Bz[:, np.flatnonzero(free)])
 
     def apply_ST(self, y):
         return self.Bz.T @ self.echol.solve(self.TT(y))
@@ -438,32 +374,6 @@ class _T3(_Transform):
         # Adjoint state of the moment-deflection system, loaded by the nonlinear forces.
         p = self.C.T @ self.A_lu.solve(nonlinear_gradient(self.dp, U), trans="T")
         return self.Q.T @ (self.Md @ (self.Q @ u) + p)
-
-
-def _saddle_inverse(A, B):
-    """``g -> (B' A^-1 B)^-1 g`` for SPD sparse A and B of full column rank, in O(N).
-
-    ``(B'A^-1B)^-1`` is dense, but ``[[A, B], [B', 0]] [y; z] = [0; g]`` gives
-    ``z = -(B'A^-1B)^-1 g``; the bordered system is sparse and is factored
-    once.  It is first scaled symmetrically (A to a unit diagonal, the columns
-    of B to unit norm): the entries of A and B differ by ~N^4 on fine meshes.
-    """
-    m = B.shape[1]
-    if m == 0:
-        return lambda g: np.zeros(0)
-    d1 = 1.0 / np.sqrt(A.diagonal())
-    Bs = sp.diags(d1) @ B
-    d2 = 1.0 / np.sqrt(np.asarray(Bs.multiply(Bs).sum(axis=0)).ravel())
-    Bs = Bs @ sp.diags(d2)
-    As = sp.diags(d1) @ A @ sp.diags(d1)
-    lu = spla.splu(sp.bmat([[As, Bs], [Bs.T, None]]).tocsc())
-    n = A.shape[0]
-
-    def solve(g):
-        rhs = np.concatenate([np.zeros(n), d2 * np.asarray(g, float)])
-        return -d2 * lu.solve(rhs)[n:]
-
-    return solve
 
 
 def _load_knots(dp) -> np.ndarray:
@@ -626,17 +536,42 @@ def solve_cvm(dp: DiscreteProblem, transform: str = "auto", control: str = "P1",
     total_iter = 0
     inner = {"cg_iterations": 0, "hessian_products": 0, "cg_unconverged": 0}
     gaps = []
-    for _ in range(7):
-        run = projected_newton if newton else conditional_gradient
-        u, nit, ok, measure, note, stats = run(tr, u, C, bounded, tol, max_iter)
+
+    def run(C, bounded, u):
+        nonlocal total_iter, gaps
+        minimise = projected_newton if newton else conditional_gradient
+        u, nit, ok, measure, note, stats = minimise(tr, u, C, bounded, tol, max_iter)
         total_iter += nit
         for k in inner:
             inner[k] += stats.get(k, 0)
         gaps += stats.get("gaps", [])
-        active = bool(np.any(np.abs(u) >= C * (1 - 1e-9)))
-        if not (adapt and active):
-            break
-        C *= 10.0
+        return u, ok, measure, note
+
+    def on_bound(u, C):
+        return bool(np.any(np.abs(u) >= C * (1 - 1e-9)))
+
+    if newton and adapt:
+        # The box only models the thesis's U_ad, and the default C is generous: the
+        # constrained optimum lies on the bound exactly when the unconstrained one
+        # lies outside the box (the reduced cost is strictly convex).  So minimise
+        # without the box and raise C tenfold, up to six times, until it holds the
+        # optimum; a first Newton step far outside the box would otherwise leave
+        # thousands of controls crawling along it (seen at 16384 elements).
+        u, ok, measure, note = run(math.inf, np.zeros(tr.m, dtype=bool), u)
+        for _ in range(6):
+            if not on_bound(u, C):
+                break
+            C *= 10.0
+        if on_bound(u, C):
+            u, ok, measure, note = run(C, bounded, np.clip(u, -C, C))
+        active = on_bound(u, C)
+    else:
+        for _ in range(7):
+            u, ok, measure, note = run(C, bounded, u)
+            active = on_bound(u, C)
+            if not (adapt and active):
+                break
+            C *= 10.0
     U = tr.state(u)
     residual = dp.residual(U)
     status = "optimal" if ok else "inaccurate"

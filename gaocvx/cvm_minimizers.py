@@ -169,13 +169,20 @@ def projected_newton(tr, u, C, bounded, tol, max_iter):
         df, ncg, conv = pcg(apply_A, -gf, pre, rtol)
         stats["cg_iterations"] += ncg
         stats["cg_unconverged"] += not conv
-        trial = u.copy()
-        trial[idx] = np.clip(u[idx] + df, lo[idx], hi[idx])
-        trial[held] = bound_of[held]
-        step = trial - u
-        slope0 = float(g @ step)
-        if not slope0 < 0.0:
-            return u, it, False, measure, ("no descent along the projected Newton step "
+        # The segment to the projected Newton point; where the projection spoils
+        # descent (a Hessian far from diagonal), Bertsekas's arc: shorter Newton
+        # steps, projected, until the segment descends (it does for small ones).
+        for _ in range(40):
+            trial = u.copy()
+            trial[idx] = np.clip(u[idx] + df, lo[idx], hi[idx])
+            trial[held] = bound_of[held]
+            step = trial - u
+            slope0 = float(g @ step)
+            if slope0 < 0.0:
+                break
+            df = 0.5 * df
+        else:
+            return u, it, False, measure, ("no descent along the projected Newton arc "
                                            "(round-off)"), stats
         # The reduced cost is convex along the segment: its derivative, from the
         # adjoint gradient, locates the step without comparing costs (which lose
@@ -187,8 +194,9 @@ def projected_newton(tr, u, C, bounded, tol, max_iter):
             return u, it, False, measure, "the projected line search failed", stats
         # The full step lands exactly on the bounds (u + (trial - u) may miss them by round-off).
         u = trial if t == 1.0 else u + t * step
-        log.debug("projected newton %d: measure %.2e, %d CG iterations, step %.3g",
-                  it, measure, ncg, t)
+        log.debug("projected newton %d: measure %.2e, %d CG iterations (%s), step %.3g, "
+                  "%d held", it, measure, ncg, "converged" if conv else "not converged", t,
+                  held.sum())
     U = tr.state(u)
     g = tr.gradient(u, U)
     held, bound_of = _held(u, g, lo, hi, C)
