@@ -426,6 +426,8 @@ def _build_parser() -> argparse.ArgumentParser:
     p.add_argument("which", choices=["thesis"], help="the report to make")
     p.add_argument("--output", metavar="FILE", help="write Markdown here instead of stdout")
     p.set_defaults(func=_cmd_report)
+    from .nonconvex.cli import add_commands  # equilibria, path (above the convexity limit)
+    add_commands(sub, _common)
     for p in sub.choices.values():  # -v after the subcommand too; counts add up
         p.add_argument("-v", "--verbose", dest="verbose_after", action="count", default=0,
                        help="log phases and progress to stderr (-vv for debug)")

@@ -10,9 +10,14 @@ buckling modes (``../shared/spec/nonconvex.md``, docs/nonconvex.md):
 ``bnb``        branch and bound with a certified gap
 ``minimum``    the global minimiser, polished and certified
 ``api``        ``solve(scene, "global")``'s results
+``stationary`` every equilibrium for one unstable mode (zeros of F'(s))
+``path``       equilibrium paths against the axial force
 """
 
 from .api import above_limit, solve_global_result
+from .path import EquilibriumPath, equilibrium_path
+from .stationary import Equilibrium, equilibria
 from .modes import unstable_modes
 
-__all__ = ["above_limit", "solve_global_result", "unstable_modes"]
+__all__ = ["above_limit", "solve_global_result", "unstable_modes", "Equilibrium", "equilibria",
+           "EquilibriumPath", "equilibrium_path"]

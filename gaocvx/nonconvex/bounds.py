@@ -31,7 +31,7 @@ import numpy as np
 
 from ..errors import SceneError
 
-__all__ = ["t_max", "amplitude_box", "check_bounded"]
+__all__ = ["t_max", "amplitude_box", "equilibrium_box", "check_bounded"]
 
 
 def t_max(a: float, p: float, c0: float, upper: float) -> float:
@@ -115,3 +115,35 @@ def amplitude_box(dp, k: int, upper: float = 0.0, lam1: float = 0.0) -> tuple[np
     # A relative margin: the bound is exact, but its inputs carry round-off.
     S *= 1.0 + 1e-9
     return -S * np.ones(k), S * np.ones(k)
+
+
+def equilibrium_box(dp, lam1: float) -> float:
+    """A bound ``S`` on the amplitude ``|s|`` of every equilibrium (non-dimensional).
+
+    At an equilibrium ``grad Pi(u) . u = 0`` (an obstacle's multipliers make it
+    ``lam' levels <= 0``), i.e.
+    ``a/3 ∫(w')^4 + u'K u - p t - f'u + grad F . u <= 0``.  With
+    ``∫(w')^4 >= t^2``, ``u'K u >= lambda_1 t``, ``f'u <= eps/2 u'K u + c0/eps``
+    (``0 < eps < 2``) and ``grad F . u >= 0`` for a unilateral foundation
+    (``>= -Σ c w_q g^2 / 4`` for a bonded one), ``t`` is at most the larger root
+    of ``a/3 t^2 - (p - (1 - eps/2) lambda_1) t - c0/eps - c_F``, and
+    ``|s|^2 <= t``.  The smallest over a few ``eps`` is taken.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> dp = SimpleNamespace(a=3.0, p=2.0, f=np.zeros(1), n=1, contact=None)
+    >>> round(equilibrium_box(dp, 1.0), 6)      # t^2 - (2 - (1 - eps/2)) t <= 0, eps -> 0
+    1.0
+    """
+    c0 = load_constant(dp)
+    cf = 0.0
+    if dp.contact == "foundation" and getattr(dp, "bilateral", False):
+        cf = float(np.sum(np.broadcast_to(dp.c * dp.wq_c, dp.wq_c.shape)
+                          * np.broadcast_to(dp.g, dp.wq_c.shape) ** 2)) / 4.0
+    best = math.inf
+    for eps in ([1e-12] if c0 == 0 else [10.0**-j for j in range(0, 13)] + [1.5, 1.9]):
+        A, B, C = dp.a / 3.0, dp.p - (1.0 - eps / 2.0) * lam1, c0 / eps + cf
+        t = (B + math.sqrt(B * B + 4.0 * A * C)) / (2.0 * A)
+        best = min(best, max(t, 0.0))
+    return math.sqrt(best) * (1.0 + 1e-9)

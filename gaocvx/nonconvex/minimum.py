@@ -279,7 +279,10 @@ def _run(dp, modes, max_nodes, t0):
         F, _, u, ok = prog.reduced(s)
         if u is not None and dp.energy(u) < start[0]:
             start = (dp.energy(u), u, s, prog.obstacle_multipliers())
-    lo, hi = amplitude_box(dp, k, upper=start[0], lam1=float(modes.lam[0]) * (1.0 - 1e-9))
+    # lambda_1 of (K, G) bounds u'K u / t; with a bonded foundation the modes are
+    # those of (K + c M, G), whose lambda_1 is no bound of it: none is used then.
+    lam1 = 0.0 if getattr(dp, "bilateral", False) else float(modes.lam[0]) * (1.0 - 1e-9)
+    lo, hi = amplitude_box(dp, k, upper=start[0], lam1=lam1)
     scale = max(sum(abs(v) for v in dp.energy_parts(start[1]).values()), 1e-300)
     out = branch_and_bound(prog, _feasible_energy(dp, prog), lo, hi, GAP_TARGET * scale,
                            max_nodes, start)

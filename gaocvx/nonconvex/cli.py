@@ -1,0 +1,142 @@
+"""The ``gaocvx equilibria`` and ``gaocvx path`` subcommands.
+
+``add_commands(sub, common)`` registers them on the main parser
+(:mod:`gaocvx.cli`); each returns the exit status: 0 when every answer is
+accurate, 1 when one is not, 2 for bad input (raised as SceneError).
+
+Examples
+--------
+>>> import argparse
+>>> parser = argparse.ArgumentParser()
+>>> add_commands(parser.add_subparsers(), lambda p: None)
+>>> sorted(parser._subparsers._group_actions[0].choices)
+['equilibria', 'path']
+"""
+
+from __future__ import annotations
+
+import csv
+import logging
+import sys
+
+import numpy as np
+
+from ..errors import SceneError
+
+__all__ = ["add_commands", "parse_range"]
+
+log = logging.getLogger(__name__)
+
+
+def parse_range(text: str) -> np.ndarray:
+    """``START:STOP:NUM`` -> NUM equally spaced forces.
+
+    Raises
+    ------
+    SceneError
+        Naming ``--axial`` and the text.
+
+    Examples
+    --------
+    >>> parse_range("0:2e9:3").tolist()
+    [0.0, 1000000000.0, 2000000000.0]
+    """
+    parts = str(text).split(":")
+    try:
+        if len(parts) != 3:
+            raise ValueError
+        start, stop, num = float(parts[0]), float(parts[1]), int(parts[2])
+    except ValueError:
+        raise SceneError("--axial", "must be START:STOP:NUM, e.g. 0:3e9:31", text) from None
+    if not (np.isfinite(start) and np.isfinite(stop)) or not 1 <= num <= 10000:
+        raise SceneError("--axial", "needs finite START and STOP and 1 <= NUM <= 10000", text)
+    return np.linspace(start, stop, num)
+
+
+def _scene(args):
+    from ..cli import _overrides
+    from ..scene import load_scene
+    return load_scene(args.scene, _overrides(args))
+
+
+def _cmd_equilibria(args) -> int:
+    from ..cli import _check_output, _dumps
+    from .stationary import equilibria
+
+    if args.plot:
+        _check_output("--plot", args.plot, suffixes=True)
+    scene = _scene(args)
+    eqs = equilibria(scene)
+    for rank, e in enumerate(eqs):
+        if args.json:
+            print(_dumps({"rank": rank, **e.to_dict()}), flush=True)
+        else:
+            print(f"{rank:2d}  {'stable  ' if e.stable else 'unstable'}  energy {e.energy:14.8g} J"
+                  f"  min w {e.min['w']:11.5g} m at {e.min['x']:.4g}  max w {e.max['w']:11.5g} m"
+                  f" at {e.max['x']:.4g}  {e.status}")
+    if args.plot:
+        from .pictures import save_equilibria_plot
+        save_equilibria_plot(eqs, args.plot, scene)
+    bad = [e for e in eqs if e.status != "optimal"]
+    if bad:
+        print(f"error: {args.scene}: {len(bad)} equilibria not found accurately", file=sys.stderr)
+    return 1 if bad else 0
+
+
+def _cmd_path(args) -> int:
+    from ..cli import _check_output, _dumps
+    from ..sweep import ProgressBar
+    from .path import equilibrium_path
+
+    values = parse_range(args.axial)
+    for option, name in (("--plot", args.plot), ("--csv", args.csv)):
+        if name:
+            _check_output(option, name, suffixes=option == "--plot")
+    scene = _scene(args)
+    bar = ProgressBar("path") if sys.stderr.isatty() else None
+    path = equilibrium_path(scene, values, x_c=args.at, progress=bar)
+    if args.json:
+        for p in path.points:
+            print(_dumps(p), flush=True)
+    else:
+        print(f"# {len(path.points)} equilibria at {len(path.P)} axial forces; "
+              f"w_c = w({path.x_c:.4g} m)")
+        for p in path.points:
+            print(f"P {p['P']:12.5g} N  w_c {p['w_c']:12.5g} m  energy {p['energy']:13.6g} J  "
+                  f"{'stable  ' if p['stable'] else 'unstable'}{'  global' if p['global'] else ''}")
+    for P, why in path.errors.items():
+        print(f"error: P = {P:.6g} N: {why}", file=sys.stderr)
+    if args.csv:
+        with open(args.csv, "w", newline="") as fh:
+            csv.writer(fh).writerows(path.rows())
+    if args.plot:
+        from ..discrete import DiscreteProblem
+        from .pictures import save_path_plot
+        P_bar = DiscreteProblem(scene, check_convexity=False).P_bar_h
+        save_path_plot(path, args.plot, scene, P_bar)
+    bad = [p for p in path.points if p["status"] != "optimal"]
+    return 1 if bad or path.errors else 0
+
+
+def add_commands(sub, common) -> None:
+    """Register ``equilibria`` and ``path`` on the subparsers ``sub``.
+
+    ``common(p)`` adds the options every scene command takes (--set, --elements, ...).
+    """
+    p = sub.add_parser("equilibria", help="every equilibrium above the convexity limit "
+                       "(one unstable mode), sorted by energy")
+    p.add_argument("scene", metavar="SCENE")
+    common(p)
+    p.add_argument("--plot", metavar="FILE", help="write every equilibrium's deflection")
+    p.set_defaults(func=_cmd_equilibria)
+
+    p = sub.add_parser("path", help="the equilibrium path: every equilibrium against P")
+    p.add_argument("scene", metavar="SCENE")
+    p.add_argument("--axial", required=True, metavar="START:STOP:NUM",
+                   help="axial forces [N], e.g. -1e9:4e9:51")
+    p.add_argument("--at", type=float, metavar="X",
+                   help="where to take the deflection [m] (default: the first mode's peak)")
+    common(p)
+    p.add_argument("--csv", metavar="FILE", help="write one row per equilibrium")
+    p.add_argument("--plot", metavar="FILE", help="write the path diagram (PNG/SVG)")
+    p.set_defaults(func=_cmd_path)

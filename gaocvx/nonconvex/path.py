@@ -1,0 +1,164 @@
+"""Equilibrium paths: every equilibrium against the axial force.
+
+:func:`equilibrium_path` finds every equilibrium (:func:`.stationary.equilibria`)
+at each axial force of a list, from tension through ``P_bar`` up to several
+times it, and marks the global minimiser at each.  Neighbouring forces reuse
+each other's answers: the amplitudes of the previous step's equilibria are
+sampled first (warm starts; the grid then catches branches that appear), and
+the mesh's structure is cached by the solvers.
+
+A characteristic deflection is tracked along the path: ``w`` at a point
+``x_c`` (default: where the first buckling mode's deflection is largest:
+mid-span for P1 and P4, the tip for P3), signed, so that mirror-image branches
+stay apart.
+
+Examples
+--------
+>>> from gaocvx import Scene
+>>> scene = Scene.from_dict({"beam": {"model": "gao", "supports": "P4", "length": 1.0,
+...     "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1, "width": 1.0},
+...     "load": {"q": -1e6}, "mesh": {"elements": 8}})
+>>> path = equilibrium_path(scene, [0.5e9, 1.5e9])
+>>> [len(path.at(P)) for P in path.P]                 # one below P_bar, three above
+[1, 3]
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import SceneError
+
+__all__ = ["EquilibriumPath", "equilibrium_path", "characteristic_point"]
+
+log = logging.getLogger(__name__)
+
+
+def characteristic_point(scene, elements=None) -> float:
+    """Where the first buckling mode's deflection is largest [m] (the path's default x_c)."""
+    from ..discrete import DiscreteProblem
+    from .modes import unstable_modes
+
+    dp = DiscreteProblem(scene.with_overrides({"load.axial": 0.0}), elements=elements,
+                         check_convexity=False)
+    if dp.n == 0:
+        return 0.5 * dp.L
+    probe = unstable_modes(dp, min_k=1)
+    w = dp.full(probe.phi[:, 0])[0::2]
+    return float(dp.x[int(np.argmax(np.abs(w)))])
+
+
+@dataclass
+class EquilibriumPath:
+    """Equilibria along a list of axial forces.
+
+    Attributes
+    ----------
+    P : list of float
+        The axial forces [N].
+    points : list of dict
+        One per equilibrium: ``P``, ``w_c`` (deflection at ``x_c``), ``max_abs_w``,
+        ``energy`` [J], ``stable``, ``global`` (the global minimiser at its P),
+        ``amplitude``, ``status``.
+    x_c : float
+        Where ``w_c`` is taken [m].
+    errors : dict
+        P -> message, for forces that could not be solved (e.g. two unstable modes).
+    """
+
+    P: list
+    points: list
+    x_c: float
+    errors: dict = field(default_factory=dict)
+
+    def at(self, P) -> list:
+        """The equilibria at force ``P``, sorted by energy."""
+        return [p for p in self.points if p["P"] == P]
+
+    def rows(self) -> list:
+        """CSV rows (header first)."""
+        keys = ["P", "w_c", "max_abs_w", "energy", "stable", "global", "amplitude", "status"]
+        return [keys] + [[p[k] for k in keys] for p in self.points]
+
+    def branches(self) -> list:
+        """Equilibria joined into branches: each point is linked to the nearest
+        (in ``w_c``) equilibrium of the same stability at the previous force.
+
+        Returns lists of points, each a polyline of one stability.
+        """
+        branches = []
+        open_ = []
+        for P in self.P:
+            here = sorted(self.at(P), key=lambda p: p["w_c"])
+            taken = set()
+            new_open = []
+            for pt in here:
+                best, dist = None, np.inf
+                for i, br in enumerate(open_):
+                    last = br[-1]
+                    if i in taken or last["stable"] != pt["stable"]:
+                        continue
+                    d = abs(last["w_c"] - pt["w_c"])
+                    if d < dist:
+                        best, dist = i, d
+                if best is not None:
+                    taken.add(best)
+                    open_[best].append(pt)
+                    new_open.append(open_[best])
+                else:
+                    br = [pt]
+                    branches.append(br)
+                    new_open.append(br)
+            open_ = new_open
+        return branches
+
+
+def equilibrium_path(scene, P_values, elements: int | None = None, x_c: float | None = None,
+                     progress=None) -> EquilibriumPath:
+    """Every equilibrium at each axial force of ``P_values`` [N].
+
+    Parameters
+    ----------
+    scene : Scene
+    P_values : sequence of float
+    elements : int, optional
+    x_c : float, optional
+        Where to take the characteristic deflection [m].
+    progress : callable, optional
+        ``progress(done, total)`` after each force.
+
+    Returns
+    -------
+    EquilibriumPath
+        Forces with more than one unstable mode (or without a minimiser) are
+        listed in ``errors`` and skipped.
+    """
+    from .stationary import equilibria
+
+    P_values = [float(P) for P in P_values]
+    if x_c is None:
+        x_c = characteristic_point(scene, elements)
+    points, errors = [], {}
+    seeds = np.zeros(0)
+    for done, P in enumerate(P_values, start=1):
+        try:
+            eqs = equilibria(scene.with_overrides({"load.axial": P}), elements, seeds=seeds)
+        except SceneError as exc:
+            errors[P] = str(exc)
+            log.info("path: P = %.4g N skipped: %s", P, exc)
+            eqs = []
+        lowest = min((e.energy for e in eqs), default=None)
+        for e in eqs:
+            points.append({"P": P, "w_c": e.deflection_at(x_c),
+                           "max_abs_w": float(np.max(np.abs(e.w))), "energy": e.energy,
+                           "stable": e.stable, "global": e.energy == lowest,
+                           "amplitude": e.amplitudes[0] if e.amplitudes else None,
+                           "status": e.status})
+        # Warm start: the next force samples these amplitudes first.
+        seeds = np.array([e.amplitude_m[0] for e in eqs if e.amplitudes])
+        if progress:
+            progress(done, len(P_values))
+    return EquilibriumPath(P_values, points, x_c, errors)

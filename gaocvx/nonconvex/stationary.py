@@ -1,0 +1,248 @@
+"""Every equilibrium of a beam above the convexity limit (k = 1 unstable mode).
+
+At an equilibrium the gradient in the stable directions vanishes, and for
+given amplitudes ``s`` of the unstable modes the energy is strictly convex in
+the rest, so ``v*(s)`` is unique: the equilibria are exactly the stationary
+points of the reduced function ``F(s) = min_v Psi(s, v) - c s^2``
+(nonconvex.md), whose derivative comes with each fixed-amplitude solve
+(:meth:`.node.NodeProgram.reduced`, envelope theorem).  So:
+
+1. every equilibrium has its amplitude in ``[-S, S]`` (:func:`.bounds.equilibrium_box`);
+2. ``F'`` is sampled on a grid over it (and at ``seeds``, e.g. the previous
+   load step's equilibria on a path); where it changes sign, or comes close
+   to zero between grid points (two roots close together), Brent's method
+   finds its zeros;
+3. each zero is classified: ``F'' > 0`` (``F'`` rising through zero, or a
+   kink from negative to positive, where an obstacle starts to hold the
+   beam) is a local minimum of the energy (stable); ``F'' < 0`` an unstable
+   equilibrium (for k = 1: a local maximum of ``F``).
+
+Below the limit (k = 0) the one equilibrium is the convex minimiser.
+
+Examples
+--------
+>>> from gaocvx import Scene
+>>> scene = Scene.from_dict({"beam": {"model": "gao", "supports": "P4", "length": 1.0,
+...     "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1, "width": 1.0},
+...     "load": {"axial": 1.3e9}, "mesh": {"elements": 8}})
+>>> eqs = equilibria(scene)                 # q = 0: w = 0 between two mirror images
+>>> [e.stable for e in eqs], round(eqs[2].energy, 6)
+([True, True, False], 0.0)
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.optimize as so
+
+from ..discrete import DiscreteProblem
+from ..errors import SceneError
+from .bounds import check_bounded, equilibrium_box
+
+__all__ = ["Equilibrium", "equilibria", "GRID"]
+
+log = logging.getLogger(__name__)
+
+# Grid points of F' over the amplitude range (odd: s = 0 is one of them, the
+# trivial equilibrium of an unloaded beam).
+GRID = 121
+# |F'(s)| |s| at a zero, relative to the equilibrium's energy scale (sum of
+# |energy parts|), at most (the node programs' own accuracy is about 1e-10).
+ROOT_TOL = 1e-8
+
+
+@dataclass
+class Equilibrium:
+    """One equilibrium of the discrete beam.
+
+    Attributes
+    ----------
+    energy : float
+        Total potential energy [J].
+    stable : bool
+        A local minimum of the energy (``F'' > 0``).
+    amplitudes : list of float
+        Its unstable modes' amplitudes ``s`` (non-dimensional).
+    x, w, slope : ndarray
+        Nodes [m], deflection [m], slope.
+    residual : float
+        ``|F'(s)| |s|`` relative to the energy scale (0 for the convex case).
+    status : str
+        "optimal" when the fixed-amplitude solve and the zero are accurate,
+        else "inaccurate".
+    P : float
+        The axial force [N].
+    """
+
+    energy: float
+    stable: bool
+    amplitudes: list
+    x: np.ndarray
+    w: np.ndarray
+    slope: np.ndarray
+    residual: float
+    status: str
+    P: float
+    curvature: float = field(default=math.nan)
+    W: float = field(default=math.nan)
+
+    @property
+    def amplitude_m(self) -> list:
+        """The amplitudes in metres (``s W``): comparable between axial forces."""
+        return [a * self.W for a in self.amplitudes]
+
+    @property
+    def min(self) -> dict:
+        i = int(np.argmin(self.w))
+        return {"w": float(self.w[i]), "x": float(self.x[i])}
+
+    @property
+    def max(self) -> dict:
+        i = int(np.argmax(self.w))
+        return {"w": float(self.w[i]), "x": float(self.x[i])}
+
+    def deflection_at(self, x: float) -> float:
+        """Nodal-interpolated deflection at ``x`` [m] (linear between nodes)."""
+        return float(np.interp(x, self.x, self.w))
+
+    def to_dict(self) -> dict:
+        """One JSON object: energy, stability, extrema, amplitudes, nodal values."""
+        return {"energy": self.energy, "stability": "stable" if self.stable else "unstable",
+                "P": self.P, "min": self.min, "max": self.max, "amplitudes": self.amplitudes,
+                "status": self.status, "residual": self.residual,
+                "nodes": {"x": self.x.tolist(), "w": self.w.tolist(),
+                          "slope": self.slope.tolist()}}
+
+
+def _convex_equilibrium(scene, elements, dp) -> list:
+    from ..solve import solve
+    r = solve(scene, "global", elements=elements)
+    return [Equilibrium(r.energy, True, [], r.x, r.w, r.slope, 0.0, r.status,
+                        float(scene.load.axial))]
+
+
+def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID) -> list:
+    """Every equilibrium of ``scene`` (k <= 1 unstable modes), sorted by energy.
+
+    Parameters
+    ----------
+    scene : Scene
+    elements : int, optional
+        Overrides ``scene.mesh.elements``.
+    seeds : sequence of float, optional
+        Amplitudes [m] (:attr:`Equilibrium.amplitude_m`) to sample besides the
+        grid: a path's previous equilibria.
+    grid : int
+        Grid points over the amplitude range.
+
+    Returns
+    -------
+    list of Equilibrium
+
+    Raises
+    ------
+    SceneError
+        For scenes with more than one unstable mode, or without a minimiser.
+    """
+    from .api import provably_convex
+    from .minimum import MAX_ELEMENTS, rescale_for
+    from .modes import unstable_modes
+    from .node import NodeProgram
+
+    dp = DiscreteProblem(scene, elements=elements, check_convexity=False)
+    if provably_convex(dp):
+        return _convex_equilibrium(scene, elements, dp)
+    check_bounded(dp)
+    if dp.n_nodes - 1 > MAX_ELEMENTS:
+        raise SceneError("mesh.elements", f"equilibria above the convexity limit take at most "
+                         f"{MAX_ELEMENTS} elements", dp.n_nodes - 1)
+    modes = unstable_modes(dp)
+    if modes.k == 0:
+        modes = unstable_modes(dp, min_k=1)
+    if modes.k > 1:
+        raise SceneError("load.axial", f"P = {dp.P:.4g} N leaves {modes.k} unstable buckling "
+                         "modes; all equilibria are found for one (P below the second mode "
+                         f"load {float(modes.loads[1]) if modes.k > 1 else math.nan:.4g} N)",
+                         dp.P)
+    dp = rescale_for(dp, modes)
+    prog = NodeProgram(dp, modes)
+    # (with a bonded foundation the modes' lambda_1 is that of K + c M: no bound
+    # of u'K u / t, so none is used; equilibrium_box counts the foundation itself)
+    lam1 = 0.0 if getattr(dp, "bilateral", False) else float(modes.lam[0]) * (1.0 - 1e-9)
+    S = float(equilibrium_box(dp, lam1))
+    return _find(dp, prog, S, np.asarray(seeds, float) / dp.W, grid)
+
+
+def _find(dp, prog, S, seeds, grid):
+    t0 = time.perf_counter()
+    cache = {}
+
+    def dF(s):
+        if s not in cache:
+            F, d, u, ok = prog.reduced([s])
+            cache[s] = (F, float(d[0]), u, ok)
+        return cache[s]
+
+    pts = np.union1d(np.linspace(-S, S, grid), seeds[np.abs(seeds) <= S])
+    vals = [(s, dF(float(s))) for s in pts]
+    vals = [(s, v) for s, v in vals if math.isfinite(v[0])]  # an obstacle bounds s
+    if not vals:
+        raise SceneError("scene", "no admissible amplitude of the buckling mode (no solve "
+                         "succeeded)")
+    scale = max(max(abs(v[0]) for _, v in vals), 1e-300)
+    roots = []
+
+    def refine(a, b):
+        try:
+            r = so.brentq(lambda s: dF(s)[1], a, b, xtol=1e-13 * S, rtol=1e-14, maxiter=200)
+        except ValueError:
+            return
+        roots.append(r)
+
+    for (s0, v0), (s1, v1) in zip(vals[:-1], vals[1:]):
+        d0, d1 = v0[1], v1[1]
+        if d0 == 0.0:
+            roots.append(s0)
+        elif d0 * d1 < 0:
+            refine(s0, s1)
+    if vals[-1][1][1] == 0.0:
+        roots.append(vals[-1][0])
+    # Two zeros between neighbouring grid points: F' has a local extremum near zero
+    # there without changing sign at the grid.  Look for its extremum.
+    d = np.array([v[1] for _, v in vals])
+    s_arr = np.array([s for s, _ in vals])
+    for i in range(1, len(d) - 1):
+        if (d[i] - d[i - 1]) * (d[i + 1] - d[i]) < 0 and abs(d[i]) < 0.05 * np.max(np.abs(d)):
+            sign = 1.0 if d[i] > 0 else -1.0
+            res = so.minimize_scalar(lambda s: sign * dF(s)[1], bounds=(s_arr[i - 1], s_arr[i + 1]),
+                                     method="bounded", options=dict(xatol=1e-12 * S))
+            if sign * res.fun < 0:
+                refine(s_arr[i - 1], res.x)
+                refine(res.x, s_arr[i + 1])
+    out = []
+    for r in sorted(set(roots)):
+        if any(abs(r - e) <= 1e-9 * S for e in [q.amplitudes[0] for q in out]):
+            continue
+        F, d0, u, ok = dF(r)
+        h = 1e-6 * S
+        left, right = dF(r - h)[1], dF(r + h)[1]
+        curvature = (right - left) / (2 * h)
+        stable = right > 0 and left < 0 if (right - left) != 0 else curvature > 0
+        w, slope = dp.to_physical(u)
+        # |F'| times the amplitude: the work of the residual force, relative to
+        # the equilibrium's energy scale (w = 0: the amplitude range's thousandth)
+        size = sum(abs(v) for v in dp.energy_parts(u).values()) or scale
+        res = abs(d0) * max(abs(r), 1e-3 * S) / size
+        status = "optimal" if ok and res <= ROOT_TOL else "inaccurate"
+        out.append(Equilibrium(float(dp.energy(u) * dp.E0), bool(stable), [float(r)], dp.x.copy(),
+                               w, slope, float(res), status, float(dp.P), float(curvature),
+                               float(dp.W)))
+    out.sort(key=lambda e: e.energy)
+    log.info("equilibria: %d found with %d solves in %.2f s", len(out), len(cache),
+             time.perf_counter() - t0)
+    return out

@@ -1,0 +1,135 @@
+"""All equilibria and equilibrium paths above the convexity limit (issue 10).
+
+References from outside the code under test: the independent energy of
+tests/independent.py (assembled in tests/test_nonconvex.py's Energy), its
+gradient and Hessian at each reported equilibrium, and an independent reduced
+function: the energy minimised (Newton, in a null-space basis written here)
+over the complement of the first mode at each amplitude of a grid, whose
+slope changes sign once per equilibrium.
+"""
+
+import json
+
+import numpy as np
+import pytest
+import scipy.linalg as sla
+
+from conftest import scene_dict
+from test_nonconvex import Energy
+
+from gaocvx import Scene, solve
+from gaocvx.cli import main
+from gaocvx.nonconvex import equilibria, equilibrium_path
+
+
+def independent_check(scene, eqs):
+    """Each equilibrium: independent gradient ~ 0, Hessian's sign as its stability."""
+    for e in eqs:
+        W = max(np.max(np.abs(e.w)), 1e-3)
+        en = Energy(scene, W)
+        x = np.zeros(2 * len(e.x))
+        x[0::2], x[1::2] = e.w / W, e.slope * scene.beam.length / W
+        x = x[en.free]
+        _, g = en(x)
+        H = en.hessian(x)
+        # relative dual norm of the gradient in a positive metric (K)
+        r = np.sqrt(abs(g @ np.linalg.solve(en.K, g))) / max(np.sqrt(x @ en.K @ x), 1e-300)
+        assert r < 1e-6, (e.energy, r)
+        lowest = np.linalg.eigvalsh(H)[0]
+        assert (lowest > 0) == e.stable, (e.energy, lowest)
+
+
+def independent_reduced_slope_changes(scene, W, S_phys, grid=81):
+    """Amplitudes where the independent reduced function's slope changes sign."""
+    en = Energy(scene, W)
+    vals, vecs = sla.eigh(en.K, en.G, subset_by_index=[0, 0])
+    phi = vecs[:, 0]
+    Gphi = en.G @ phi
+    # null-space basis of phi'G v = 0
+    Z = sla.null_space(Gphi[None, :])
+    s_grid = np.linspace(-S_phys, S_phys, grid) / W
+    F = []
+    y = np.zeros(Z.shape[1])
+    for s in s_grid:
+        for _ in range(60):
+            x = s * phi + Z @ y
+            e, g = en(x)
+            H = Z.T @ en.hessian(x) @ Z
+            step = np.linalg.solve(H, -(Z.T @ g))
+            y = y + step
+            if np.linalg.norm(step) < 1e-13 * max(np.linalg.norm(y), 1.0):
+                break
+        F.append(en(s * phi + Z @ y)[0])
+    dF = np.diff(F)
+    return [0.5 * (s_grid[i] + s_grid[i + 1]) * W for i in range(len(dF) - 1)
+            if dF[i] * dF[i + 1] < 0], phi
+
+
+@pytest.mark.parametrize("kw", [
+    dict(q=None, axial=1.3e9),                  # perfect bifurcation: 0 and two mirror images
+    dict(q=-1e7, axial=1.3e9),                  # imperfect: three, one unstable
+    dict(q=-1e7, axial=2e9),
+])
+def test_every_equilibrium_is_one_and_none_is_missed(kw):
+    scene = Scene.from_dict(scene_dict("P4", elements=12, **kw))
+    eqs = equilibria(scene)
+    assert [e.energy for e in eqs] == sorted(e.energy for e in eqs)
+    assert all(e.status == "optimal" for e in eqs)
+    independent_check(scene, eqs)
+    # the lowest is the certified global minimum
+    g = solve(scene, "global")
+    assert eqs[0].stable and eqs[0].energy == pytest.approx(g.energy, rel=1e-9)
+    # as many as the independent reduced function has stationary points
+    W = max(np.max(np.abs(e.w)) for e in eqs)
+    reach = 1.5 * max(abs(e.amplitude_m[0]) for e in eqs)   # beyond the outermost one
+    changes, _ = independent_reduced_slope_changes(scene, W, reach)
+    assert len(changes) == len(eqs)
+
+
+def test_without_load_the_trivial_equilibrium_is_exactly_zero_energy():
+    scene = Scene.from_dict(scene_dict("P1", q=None, axial=6e9, elements=12))
+    eqs = equilibria(scene)
+    assert [e.stable for e in eqs] == [True, True, False]
+    assert eqs[2].energy == 0.0 and not np.any(eqs[2].w)
+    assert eqs[0].energy == pytest.approx(eqs[1].energy, rel=1e-9)
+    assert np.allclose(eqs[0].w, -eqs[1].w, atol=1e-9 * np.max(np.abs(eqs[0].w)))
+
+
+def test_path_from_tension_through_the_limit():
+    scene = Scene.from_dict(scene_dict("P4", q=-1e7, elements=10))
+    P = [-1e9, 0.5e9, 1.5e9, 2.5e9]
+    path = equilibrium_path(scene, P)
+    counts = [len(path.at(p)) for p in P]
+    assert counts == [1, 1, 3, 3]
+    # below the limit the one equilibrium is the convex minimiser (Newton)
+    for p in P[:2]:
+        r = solve(scene.with_overrides({"load.axial": p}))
+        (pt,) = path.at(p)
+        assert pt["stable"] and pt["global"] and pt["energy"] == pytest.approx(r.energy, rel=1e-9)
+    for p in P[2:]:
+        pts = path.at(p)
+        assert sum(pt["global"] for pt in pts) == 1 and sum(not pt["stable"] for pt in pts) == 1
+    assert path.x_c == pytest.approx(0.5)
+    # branches: one stable through the limit, the other stable and the unstable one
+    kinds = sorted((br[0]["stable"], len(br)) for br in path.branches())
+    assert kinds == [(False, 2), (True, 2), (True, 4)]
+
+
+def test_cli_equilibria_and_path(tmp_path, capsys):
+    path = tmp_path / "p4.toml"
+    path.write_text('[beam]\nmodel = "gao"\nsupports = "P4"\nlength = 1.0\nE = 2.1e11\nnu = 0.3\n'
+                    'half_thickness = 0.1\nwidth = 1.0\n[load]\nq = -1e7\naxial = 1.3e9\n'
+                    '[mesh]\nelements = 8\n')
+    assert main(["equilibria", str(path), "--json", "--plot", str(tmp_path / "eq.png")]) == 0
+    lines = [json.loads(x) for x in capsys.readouterr().out.splitlines()]
+    assert [x["stability"] for x in lines] == ["stable", "stable", "unstable"]
+    assert [x["energy"] for x in lines] == sorted(x["energy"] for x in lines)
+    assert (tmp_path / "eq.png").stat().st_size > 0
+    code = main(["path", str(path), "--axial", "0:2e9:3", "--csv", str(tmp_path / "p.csv"),
+                 "--plot", str(tmp_path / "p.png"), "--json"])
+    out, err = capsys.readouterr()
+    assert code == 0 and "path [" not in err   # no progress bar off a terminal
+    rows = (tmp_path / "p.csv").read_text().splitlines()
+    assert rows[0].startswith("P,w_c") and len(rows) == 1 + 1 + 1 + 3
+    assert len(out.splitlines()) == 5
+    assert main(["path", str(path), "--axial", "0:2e9"]) == 2
