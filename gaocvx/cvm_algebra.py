@@ -120,8 +120,11 @@ class BendingSolver:
         Bm = (self.load_map() @ B).tocsc()
         d2 = 1.0 / np.sqrt(np.asarray(Bm.multiply(Bm).sum(axis=0)).ravel())
         Bm = Bm @ sp.diags(d2)
-        lu = spla.splu(sp.bmat([[mf.bending, mf.C.T, Bm], [mf.C, None, None],
-                                [Bm.T, None, None]]).tocsc())
+        try:
+            lu = spla.splu(sp.bmat([[mf.bending, mf.C.T, Bm], [mf.C, None, None],
+                                    [Bm.T, None, None]]).tocsc())
+        except RuntimeError:  # B not of full column rank: more controls than states
+            return _dense_pseudo_inverse(B, self.solve)
         n = mf.bending.shape[0] + mf.C.shape[0]
 
         def solve(g):
@@ -147,7 +150,10 @@ def saddle_inverse(A, B):
     d2 = 1.0 / np.sqrt(np.asarray(Bs.multiply(Bs).sum(axis=0)).ravel())
     Bs = Bs @ sp.diags(d2)
     As = sp.diags(d1) @ A @ sp.diags(d1)
-    lu = spla.splu(sp.bmat([[As, Bs], [Bs.T, None]]).tocsc())
+    try:
+        lu = spla.splu(sp.bmat([[As, Bs], [Bs.T, None]]).tocsc())
+    except RuntimeError:  # B not of full column rank: more controls than states
+        return _dense_pseudo_inverse(B, spla.splu(sp.csc_matrix(A)).solve)
     n = A.shape[0]
 
     def solve(g):
@@ -155,3 +161,25 @@ def saddle_inverse(A, B):
         return -d2 * lu.solve(rhs)[n:]
 
     return solve
+
+
+# Beyond this many controls a rank-deficient B is not expected (it needs more controls
+# than states: one or two elements) and the dense fallback would cost O(m^2) memory.
+DENSE_LIMIT = 400
+
+
+def _dense_pseudo_inverse(B, solve_A):
+    """``g -> (B' A^-1 B)^+ g``, dense, where B has more columns than its rank.
+
+    On meshes of one or two elements the piecewise-linear control has more
+    values than the state has DOFs, S is not injective and ``B'A^-1B`` is
+    singular; the reduced gradient lies in its range, where the pseudo-inverse
+    is the inverse, so the certificate's bound keeps its meaning.
+    """
+    m = B.shape[1]
+    if m > DENSE_LIMIT:
+        raise np.linalg.LinAlgError(f"the control map is rank-deficient with {m} controls")
+    Bd = B.toarray()
+    AinvB = np.column_stack([solve_A(Bd[:, j]) for j in range(m)]) if m else Bd
+    pinv = np.linalg.pinv(Bd.T @ AinvB, hermitian=True)
+    return lambda g: pinv @ np.asarray(g, float)

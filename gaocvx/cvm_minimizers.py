@@ -9,11 +9,11 @@ adjoint gradient and :meth:`bending_preconditioner`.  Two minimisers use them:
   ``S' H S v`` costs one state solve, one banded product with the state
   Hessian H and one adjoint solve.  The Newton system on the free controls is
   solved by conjugate gradients preconditioned with the inverse of the
-  *bending* part ``S' K S`` of the reduced Hessian (a constant sparse
-  factorisation).  The reduced Hessian inherits the N^4 conditioning of the
-  state equation, but the preconditioned operator's eigenvalues are
-  generalised Rayleigh quotients ``v'Hv / v'Kv`` of the beam's own Hessian
-  against its bending matrix, which do not grow with N.
+  *bending* part ``S' K S`` of the reduced Hessian (one sparse factorisation
+  per free set, :mod:`gaocvx.cvm_algebra`).  The reduced Hessian inherits the
+  N^4 conditioning of the state equation, but the preconditioned operator's
+  eigenvalues are generalised Rayleigh quotients ``v'Hv / v'Kv`` of the
+  beam's own Hessian against its bending matrix, which do not grow with N.
 * :func:`conditional_gradient`: the thesis's method.
 
 Every vector here has O(N) entries; no N x N array is allocated.
@@ -112,18 +112,19 @@ def projected_newton(tr, u, C, bounded, tol, max_iter):
     controls by preconditioned CG, and a line search on the segment to the
     projected Newton point.
 
-    The optimality test bounds the decrement instead of estimating it.  With ``P_F`` the
-    preconditioner of the free set F and ``theta`` a proved lower bound of
-    ``v'Hv / v'Kv`` (``1 - P / P_bar_h``, the lower end of its enclosure),
-    ``S_F'HS_F >= theta S_F'KS_F`` gives
+    The optimality test bounds the decrement instead of estimating it.  With
+    ``P_F`` the preconditioner of the free set F and ``theta`` a proved lower
+    bound of ``v'Hv / v'Kv`` (``1 - P / P_bar_h``, the lower end of its
+    enclosure), ``S_F'HS_F >= theta S_F'KS_F`` gives
 
         g_F' (S_F'HS_F)^-1 g_F  <=  g_F' P_F g_F / theta,
 
     an upper bound (in exact arithmetic) of the squared reduced Newton
-    decrement that does not depend on how well CG converged.  The measure is ``sqrt(that / |J|)``; it must be
-    <= ``tol``, and the complementarity ``sum_held g_i (u_i - bound_i)``
-    (>= 0; the first-order decrease left by not moving the held controls onto
-    their bounds) <= ``tol**2 |J|``, both in the reduced problem's own scale.
+    decrement that does not depend on how well CG converged.  The measure is
+    ``sqrt(that / |J|)``; it must be <= ``tol``, and the complementarity
+    ``sum_held g_i (u_i - bound_i)`` (>= 0; the first-order decrease left by
+    not moving the held controls onto their bounds) <= ``tol**2 |J|``, both in
+    the reduced problem's own scale.
     The measure reaches ``tol`` = 1e-10 up to 16384 elements because
     nothing in it is computed from a difference of large numbers: the state
     solves of T1 run in the mixed variables, and the gradient is
