@@ -56,7 +56,7 @@ from . import fem
 from .discrete import DiscreteProblem
 from .errors import SceneError
 from .cvm_algebra import BendingSolver, nonlinear_gradient, nonlinear_hessian, saddle_inverse
-from .cvm_minimizers import conditional_gradient, projected_newton
+from .cvm_minimizers import accelerated_gradient, conditional_gradient, projected_newton
 from .linalg import BandedCholesky
 
 __all__ = ["make_transform", "solve_cvm", "TRANSFORMS", "CONTROLS", "MINIMIZERS"]
@@ -510,7 +510,9 @@ def solve_cvm(dp: DiscreteProblem, transform: str = "auto", control: str = "P1",
     dp : DiscreteProblem
     transform : {"auto", "T1", "T2", "T3"}
     control : {"P1", "full"}
-    minimizer : {"projected-newton", "conditional-gradient"}
+    minimizer : {"projected-newton", "conditional-gradient", "accelerated-gradient"}
+        The last, FISTA, is a first-order comparison for the benchmarks only (not a
+        scene option).
     bound : float, optional
         The control bound C in the control's physical units (see the result's
         ``cvm.bound_unit``).  By default C starts far above the optimum and is
@@ -539,7 +541,9 @@ def solve_cvm(dp: DiscreteProblem, transform: str = "auto", control: str = "P1",
 
     def run(C, bounded, u):
         nonlocal total_iter, gaps
-        minimise = projected_newton if newton else conditional_gradient
+        minimise = {"projected-newton": projected_newton,
+                    "conditional-gradient": conditional_gradient,
+                    "accelerated-gradient": accelerated_gradient}[minimizer]
         u, nit, ok, measure, note, stats = minimise(tr, u, C, bounded, tol, max_iter)
         total_iter += nit
         for k in inner:
