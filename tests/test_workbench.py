@@ -226,3 +226,14 @@ def test_sweep_json_values_without_float_noise(scene_file, capsys):
     assert main(["sweep", str(scene_file), "--vary", "load.scale=0:1.6:5", "--json"]) == 0
     values = [json.loads(line)["value"] for line in capsys.readouterr().out.splitlines()]
     assert values == [0.0, 0.4, 0.8, 1.2, 1.6]
+
+
+def test_solve_docstring_lists_every_method():
+    """help(gaocvx.solve) names each method a scene accepts (it once omitted "cvm")."""
+    import gaocvx
+    from gaocvx.scene import METHODS
+
+    doc = gaocvx.solve.__doc__
+    section = doc[doc.index("method :"):doc.index("elements :")]
+    for method in METHODS:
+        assert f'"{method}"' in section, method
