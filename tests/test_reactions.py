@@ -246,6 +246,23 @@ def test_equilibrium_with_axial_force_and_gao_term(model, supports, fraction, co
     assert abs(extra) > 1e-4 * scale * L
 
 
+@pytest.mark.parametrize("supports, fraction", [("P4", 1.3), ("P3", 1.5)])
+def test_equilibrium_of_a_buckled_beam(supports, fraction):
+    """Above P_bar_h (the global method): the same two balances hold for the buckled answer."""
+    from gaocvx import DiscreteProblem
+
+    kw = dict(length=L, elements=16, q=-2e7, points=[(1.3, -5e6)])
+    probe = DiscreteProblem(Scene.from_dict(scene_dict(supports, "gao", **kw)))
+    r = solve(Scene.from_dict(scene_dict(supports, "gao", axial=fraction * probe.P_bar_h, **kw)))
+    assert r.success and r.method == "global", (r.method, r.message)
+    f_app, m_app = applied(r)
+    f_sup, m_sup = support_resultant(r)
+    extra = gao_moment_terms(r)
+    assert abs(f_sup + f_app) <= 1e-10 * scale_of(r)
+    assert abs(m_sup + m_app - extra) <= 1e-10 * scale_of(r) * L
+    assert abs(extra) > 1e-3 * scale_of(r) * L
+
+
 def test_gao_reactions_balance_the_loads_as_given():
     """The Gao model scales loads by (1 - nu^2); its reactions are divided back (cantilever: R = -q L)."""
     r = solve(Scene.from_dict(scene_dict("P3", "gao", length=L, q=-5e7, elements=16)))
