@@ -147,21 +147,37 @@ def plot(result, ax=None, label: str | None = None, annotate: bool = True, color
             plot_loads(result, top)
         else:
             _, ax = plt.subplots(figsize=(8, 4))
-    model = result.scene.beam.model
+    scene, model = result.scene, result.scene.beam.model
     xs = np.linspace(0.0, L, 801)
+    part = scene.foundation or scene.obstacle
+    if part is not None and isinstance(part.gap, tuple):   # a profile's knots exactly
+        xs = np.union1d(xs, [x for x, _ in part.gap])
     w = result.deflection(xs)
-    span = max(np.abs(w).max(), result.scene.gap or 0.0) or 1.0
+    level = None if part is None else -np.asarray(part.gap_at(xs), float)
+    above = getattr(scene.obstacle, "gap_above", None)
+    span = max(np.abs(w).max(), 0.0 if level is None else np.abs(level).max(),
+               above or 0.0) or 1.0
     if annotate:
         ax.axhline(0.0, color="0.6", lw=1.0, ls="--", label="undeformed beam")
     ax.plot(xs, w, lw=2.0, color=color, label=label or f"{model} deflection")
-    gap = result.scene.gap
-    if gap is not None:
-        kind = result.scene.contact
+    if part is not None:
+        kind = scene.contact
         if annotate:  # drawn once when several results share the Axes
-            ax.axhline(-gap, color="saddlebrown", lw=1.5, ls=":" if kind == "foundation" else "-",
-                       label=f"{kind} surface (gap {gap:g} m)")
-            if kind == "obstacle":
-                ax.axhspan(-gap - 0.15 * span, -gap, color="saddlebrown", alpha=0.15, lw=0)
+            if getattr(part, "kind", "unilateral") == "bilateral":
+                kind = "bonded foundation"
+            gaps = (f"gap {part.gap:g} m" if not isinstance(part.gap, tuple)
+                    else f"gap profile, {-level.max():.3g} to {-level.min():.3g} m")
+            ax.plot(xs, level, color="saddlebrown", lw=1.5,
+                    ls=":" if scene.contact == "foundation" else "-",
+                    label=f"{kind} surface ({gaps})")
+            if scene.contact == "obstacle":
+                ax.fill_between(xs, level - 0.15 * span, level, color="saddlebrown",
+                                alpha=0.15, lw=0)
+            if above is not None:
+                ax.plot([0.0, L], [above, above], color="saddlebrown", lw=1.5,
+                        label=f"upper surface (gap_above {above:g} m)")
+                ax.fill_between([0.0, L], above, above + 0.15 * span, color="saddlebrown",
+                                alpha=0.15, lw=0)
         zones = result.zones or []
         for i, (a, b) in enumerate(zones):
             lo, hi = (a, b) if b > a else (a - 0.004 * L, b + 0.004 * L)
@@ -171,22 +187,20 @@ def plot(result, ax=None, label: str | None = None, annotate: bool = True, color
             ax.plot([], [], lw=0, label=f"{model} contact: none")
     if annotate:
         _draw_supports(ax, result, 0.12 * span)
-        for ext, y in ((result.min, 0.05), (result.max, 0.95)):
+        # The extremes in the legend, not as text on the curve: nothing to overlap.
+        for name, ext, marker in (("min", result.min, "v"), ("max", result.max, "^")):
             if abs(ext["w"]) > 1e-12 * span:
-                ax.plot([ext["x"]], [ext["w"]], "o", color="k", ms=4)
-                ax.annotate(f"{ext['w']:.4g} m at x = {ext['x']:.4g} m", (ext["x"], ext["w"]),
-                            xytext=(ext["x"], y), textcoords=ax.get_xaxis_transform(),
-                            ha=_ha(ext["x"], L), va="bottom" if y < 0.5 else "top", fontsize=8,
-                            arrowprops={"arrowstyle": "-", "color": "0.5", "lw": 0.6},
-                            annotation_clip=True)
+                ax.plot([ext["x"]], [ext["w"]], marker, color="k", ms=5,
+                        label=f"{name} w = {ext['w']:.4g} m at x = {ext['x']:.4g} m")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("w [m] (up positive)")
     ax.set_title(_title(result), fontsize=10)
     _xlim(ax, L)
-    top = 1.3 * span if result.max["w"] > 0.02 * span else 0.45 * span
-    ax.set_ylim(-1.45 * span, top)
-    ax.legend(fontsize=8, loc="upper center" if result.max["w"] <= 0.02 * span else "best",
-              ncol=2)
+    low = min(w.min(), np.inf if level is None else level.min())
+    high = max(w.max(), 0.0, -np.inf if above is None else above)
+    # Room below for the obstacle's shading, above for the legend.
+    ax.set_ylim(low - 0.3 * span, high + (0.8 if above is not None else 0.6) * span)
+    ax.legend(fontsize=8, loc="best", ncol=2)
     return ax
 
 

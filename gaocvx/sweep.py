@@ -247,9 +247,11 @@ def summary_row(value: float, item) -> dict:
            "energy": r.energy, "contact_length": float(sum(b - a for a, b in zones)),
            "contact_zones": len(zones),   # a point contact [x, x] counts, though of length 0
            "time_s": r.time_s}
-    gap = r.scene.gap
-    if gap is not None:
-        row["penetration"] = float(max(-gap - r.min["w"], 0.0))
+    if r.scene.contact is not None:
+        # How far the beam sinks below the surface, at its worst node (a gap
+        # profile's surface is not level: the deepest point need not be the lowest).
+        level = -np.asarray(r.scene.gap_at(r.x), float)
+        row["penetration"] = float(max(np.max(level - r.w), 0.0))
     return row
 
 

@@ -169,3 +169,37 @@ def test_sweep_counts_a_point_contact():
     ax = sweep_figure(rows, "obstacle.gap", scene=scene).axes[-1]
     marked = [ln for ln in ax.lines if ln.get_label() == "point contact (length 0)"]
     assert len(marked) == 1 and list(marked[0].get_xdata()) == [0.001, 0.0015, 0.002]
+
+
+def test_a_gap_profile_and_a_channel_are_drawn_as_they_are():
+    """The surface follows the gap table (knots included); gap_above is a second surface."""
+    table = [[0.0, 0.0005], [0.4, 0.0002], [0.6, 0.0002], [1.0, 0.0005]]
+    d = scene_dict("P4", "euler-bernoulli", q=-5e7, elements=16)
+    d["obstacle"] = {"gap": table}
+    r = solve(Scene.from_dict(d))
+    ax = result_figure(r).axes[1]
+    surface = next(ln for ln in ax.lines if ln.get_label().startswith("obstacle surface"))
+    x, y = surface.get_xdata(), surface.get_ydata()
+    assert set(np.array(table)[:, 0]) <= set(x)
+    assert np.array_equal(y, -np.interp(x, *np.array(table).T))
+    assert "gap profile, 0.0002 to 0.0005 m" in surface.get_label()
+    d = scene_dict("P4", "euler-bernoulli", q=None, points=[(0.3, -6e7), (0.7, 6e7)], elements=16)
+    d["obstacle"] = {"gap": 0.001, "gap_above": 0.0005}
+    fig = result_figure(solve(Scene.from_dict(d)))
+    upper = [ln for ln in fig.axes[1].lines if ln.get_label().startswith("upper surface")]
+    assert len(upper) == 1 and list(upper[0].get_ydata()) == [0.0005, 0.0005]
+    legend = [t.get_text() for t in fig.axes[1].get_legend().get_texts()]
+    assert any(t.startswith("max w = 0.0005 m") for t in legend)
+    assert outside(fig) == []
+
+
+def test_sweep_penetration_follows_a_gap_profile():
+    """Penetration is the deepest sinking below the surface, not below its nearest point."""
+    table = [[0.0, 0.0], [0.5, 0.004], [1.0, 0.0]]   # a dent under the middle
+    d = scene_dict("P1", "euler-bernoulli", q=-5e8, elements=16)
+    d["foundation"] = {"gap": table, "stiffness": 5e9}
+    r = solve(Scene.from_dict(d))
+    row = summary_row(1.0, r)
+    level = -np.interp(r.x, *np.array(table).T)
+    assert row["penetration"] == max(np.max(level - r.w), 0.0) > 0
+    assert row["penetration"] < -0.0 - r.min["w"]   # the flat-surface formula would say more
