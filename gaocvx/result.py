@@ -392,14 +392,6 @@ def _element_vectors(x, xq, values, elem):
     return out
 
 
-def _profile(value, s):
-    """A number, or a piecewise-linear table [[x, value], ...], at the points s."""
-    if np.ndim(value) == 0:
-        return float(value)
-    table = np.asarray(value, float)
-    return np.interp(s, table[:, 0], table[:, 1])
-
-
 class _Statics:
     """Element equilibrium of a result: end forces, then the loads inside each element.
 
@@ -451,9 +443,7 @@ class _Statics:
         # The foundation's pressure with the discrete problem's Gauss rule.
         self.foundation = None
         if scene.contact == "foundation":
-            fd = scene.foundation
-            # A bonded foundation ("bilateral") pulls too: its pressure is c_F (g - w).
-            self.foundation = (lf, fd.stiffness, fd.gap, getattr(fd, "bilateral", False))
+            self.foundation = scene.foundation
             n0 = fem.shape_functions(t5, self.h[:, None], 0)
             pressure = self._pressure(xq.ravel()).reshape(xq.shape)
             F -= np.einsum("eq,eqi->ei", wq * pressure, n0)
@@ -489,10 +479,10 @@ class _Statics:
         (g - w) without the positive part for a bonded foundation; a gap or a
         stiffness given as a table [[x, value], ...] is interpolated linearly.
         """
-        lf, k, gap, bonded = self.foundation
-        w = fem.eval_matrix(self.x, s, 0) @ self.dofs
-        depth = -_profile(gap, s) - w
-        return lf * _profile(k, s) * (depth if bonded else np.maximum(depth, 0.0))
+        fd = self.foundation
+        depth = -fd.gap_at(s) - fem.eval_matrix(self.x, s, 0) @ self.dofs
+        # A bonded foundation ("bilateral") pulls too: its pressure is c_F (g - w).
+        return self.lf * fd.stiffness_at(s) * (depth if fd.bilateral else np.maximum(depth, 0.0))
 
     def _q_integrals(self, a, b):
         """∫_a^b q and ∫_a^b (b - t) q(t) dt, exactly (Simpson on each piece of the table)."""

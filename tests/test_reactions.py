@@ -105,6 +105,14 @@ def _q_resultants(table):
     return force, moment
 
 
+def _table_at(value, x):
+    """A number, or a piecewise-linear table [[x, v], ...] (constant beyond its ends)."""
+    if np.ndim(value) == 0:
+        return value
+    t = np.asarray(value, float)
+    return np.interp(x, t[:, 0], t[:, 1])
+
+
 def applied(result):
     """Resultant force and moment about x = 0 of everything but the supports (physical units).
 
@@ -122,9 +130,9 @@ def applied(result):
         force, moment = force + Fk, moment + xk * Fk
     if scene.contact == "foundation":
         xq, wq = _gauss(result.x)
-        depth = -scene.foundation.gap - result.deflection(xq)
-        bonded = getattr(scene.foundation, "kind", "unilateral") == "bilateral"
-        p = scene.foundation.stiffness * (depth if bonded else np.maximum(depth, 0))
+        fd = scene.foundation
+        depth = -_table_at(fd.gap, xq) - result.deflection(xq)
+        p = _table_at(fd.stiffness, xq) * (depth if fd.kind == "bilateral" else np.maximum(depth, 0))
         force, moment = force + wq @ p, moment + wq @ (xq * p)
     elif scene.contact == "obstacle":
         cf = result.contact_forces
@@ -178,16 +186,36 @@ def test_equilibrium_euler_bernoulli(supports, contact):
 @pytest.mark.parametrize("supports", ["P1", "P3", "P4"])
 def test_equilibrium_on_a_bonded_foundation(supports):
     """A bonded foundation pulls where the beam is above its surface: that counts too."""
-    from gaocvx.scene import Foundation
-
-    if "kind" not in Foundation.KEYS:
-        pytest.skip("no bonded foundation in this tree")
     d = scene_dict(supports, "euler-bernoulli", length=L, elements=16, **MIXED)
     d["foundation"] = {"gap": 0.0005, "stiffness": 5e9, "kind": "bilateral"}
     r = solve(Scene.from_dict(d))
     assert r.success, r.message
     xq = _gauss(r.x)[0]
     assert (r.deflection(xq) > -0.0005).any() and (r.deflection(xq) < -0.0005).any()
+    f_app, m_app = applied(r)
+    f_sup, m_sup = support_resultant(r)
+    assert abs(f_sup + f_app) <= 1e-10 * scale_of(r)
+    assert abs(m_sup + m_app) <= 1e-10 * scale_of(r) * L
+
+
+@pytest.mark.parametrize("supports", ["P2", "P3"])
+def test_equilibrium_with_profiles_and_a_channel(supports):
+    """A foundation with a gap and a stiffness table, and an obstacle channel pushing down too."""
+    d = scene_dict(supports, "euler-bernoulli", length=L, elements=16, **MIXED)
+    d["foundation"] = {"gap": [[0.0, 0.001], [1.0, 0.0002], [L, 0.003]],
+                       "stiffness": [[0.2, 1e9], [1.5, 8e9]]}
+    r = solve(Scene.from_dict(d))
+    assert r.success and r.zones, r.message
+    f_app, m_app = applied(r)
+    f_sup, m_sup = support_resultant(r)
+    assert abs(f_sup + f_app) <= 1e-10 * scale_of(r)
+    assert abs(m_sup + m_app) <= 1e-10 * scale_of(r) * L
+    d = scene_dict(supports, "euler-bernoulli", length=L, q=None, elements=16,
+                   points=[(0.6, -6e7), (1.4, 6e7)])
+    d["obstacle"] = {"gap": 0.001, "gap_above": 0.0005}
+    r = solve(Scene.from_dict(d))
+    assert r.success, r.message
+    assert (r.contact_forces[:, 1] < 0).any()   # the upper surface pushes down
     f_app, m_app = applied(r)
     f_sup, m_sup = support_resultant(r)
     assert abs(f_sup + f_app) <= 1e-10 * scale_of(r)
