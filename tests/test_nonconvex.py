@@ -309,3 +309,16 @@ def test_cli_solves_above_the_limit(tmp_path, capsys):
     assert out["method"] == "global" and out["global"]["unstable_modes"] == 1
     assert set(out["global"]) >= {"unstable_modes", "mode_loads", "bound_gap", "unique", "nodes"}
     assert main(["solve", str(path), "--method", "global"]) == 0
+
+
+def test_buckled_example_states_what_an_independent_search_finds():
+    """examples/buckled_pinned.toml: its comment's numbers, against the multi-start."""
+    from pathlib import Path
+
+    from gaocvx import load_scene
+    scene = load_scene(Path(__file__).parent.parent / "examples" / "buckled_pinned.toml")
+    r = solve(scene)
+    assert r.method == "global" and r.success and r.extra["global"]["bound_gap"] < 1e-4
+    found = multistart(scene, 0.04)
+    assert found == pytest.approx(r.energy, rel=1e-9)
+    assert found == pytest.approx(-4.1604e5, rel=1e-4) and r.min["w"] == pytest.approx(-0.03664, rel=1e-3)

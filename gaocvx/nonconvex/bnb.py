@@ -9,8 +9,9 @@ whose lower bound lies within ``tol`` of the best upper bound are closed.
 The chord error on a box bounds the gap between its bounds, so the bounds
 meet.  The search stops when the best upper bound minus the smallest lower
 bound of every leaf (open or closed) is at most ``tol``, or when every box
-left is so small that its chord error is below ``tol / 100`` (the remaining
-gap is then the node solver's accuracy): the difference is the
+left is so small that its chord error is below ``tol / 100`` or a tenth of
+its node program's own accuracy (the remaining gap is then that accuracy): the
+difference is the
 certificate, a global optimality gap, whatever stopped the search.
 
 Examples
@@ -58,6 +59,7 @@ class Leaf:
     s: np.ndarray | None
     u: np.ndarray | None
     ok: bool
+    noise: float = 0.0  # value - lower of its node program: what splitting cannot remove
 
 
 @dataclass
@@ -120,7 +122,9 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
                 best[:] = [e, sol.u, sol.s, sol.lam]
         if sol.ok:
             # A child lies inside its parent: the parent's bound holds for it too.
-            return Leaf(max(sol.lower, parent.lower), lo, hi, sol.s, sol.u, True)
+            noise = getattr(sol, "value", sol.lower) - sol.lower
+            return Leaf(max(sol.lower, parent.lower), lo, hi, sol.s, sol.u, True,
+                        noise if math.isfinite(noise) else 0.0)
         # A solve that is not optimal proves nothing: the parent's bound stands
         # (and is split further if it matters).
         return Leaf(parent.lower, lo, hi, sol.s, sol.u, parent.ok)
@@ -139,9 +143,10 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
             break
         heapq.heappop(open_)
         width = leaf.hi - leaf.lo
-        if float(np.sum(c * width**2)) / 4.0 <= 1e-2 * tol:
-            # The chord is exact to far below tol here: what is left of this box's
-            # gap is the node solver's own accuracy, which splitting cannot reduce.
+        if float(np.sum(c * width**2)) / 4.0 <= max(1e-2 * tol, 0.1 * leaf.noise):
+            # The chord is exact to far below tol here, or to a tenth of the node
+            # program's own accuracy (its solver's margin and model error): what is left of
+            # this box's gap is that accuracy, which splitting cannot reduce.
             closed.append(leaf)
             continue
         i = int(np.argmax(c * width**2))
@@ -160,5 +165,5 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
     failed = sum(not leaf.ok for leaf in frontier)
     log.info("branch and bound: %d nodes, upper %.12g, lower %.12g, %d leaves", nodes, best[0],
              lower, len(leaves))
-    return BnBResult(best[0], min(lower, best[0]), best[1], best[2], best[3], nodes, leaves,
+    return BnBResult(best[0], lower, best[1], best[2], best[3], nodes, leaves,
                      converged, failed)

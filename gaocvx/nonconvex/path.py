@@ -85,12 +85,16 @@ class EquilibriumPath:
 
     def branches(self) -> list:
         """Equilibria joined into branches: each point is linked to the nearest
-        (in ``w_c``) equilibrium of the same stability at the previous force.
+        (in ``w_c``) equilibrium of the same stability at the previous force,
+        on the same side of w_c = 0 or within a fifth of the largest ``|w_c|``.
 
         Returns lists of points, each a polyline of one stability.
         """
         branches = []
         open_ = []
+        # A link across w_c = 0 longer than this is no continuation but another
+        # branch (an obstacle's pressed branch ends where a free one begins).
+        reach = 0.2 * max((abs(p["w_c"]) for p in self.points), default=0.0)
         for P in self.P:
             here = sorted(self.at(P), key=lambda p: p["w_c"])
             taken = set()
@@ -102,7 +106,8 @@ class EquilibriumPath:
                     if i in taken or last["stable"] != pt["stable"]:
                         continue
                     d = abs(last["w_c"] - pt["w_c"])
-                    if d < dist:
+                    same_side = last["w_c"] * pt["w_c"] >= 0
+                    if d < dist and (d <= reach or same_side):
                         best, dist = i, d
                 if best is not None:
                     taken.add(best)
@@ -151,10 +156,12 @@ def equilibrium_path(scene, P_values, elements: int | None = None, x_c: float | 
             log.info("path: P = %.4g N skipped: %s", P, exc)
             eqs = []
         lowest = min((e.energy for e in eqs), default=None)
+        # Mirror images are both global minimisers: ties within round-off count.
+        tie = 1e-9 * max((abs(e.energy) for e in eqs), default=0.0)
         for e in eqs:
             points.append({"P": P, "w_c": e.deflection_at(x_c),
                            "max_abs_w": float(np.max(np.abs(e.w))), "energy": e.energy,
-                           "stable": e.stable, "global": e.energy == lowest,
+                           "stable": e.stable, "global": e.energy <= lowest + tie,
                            "amplitude": e.amplitudes[0] if e.amplitudes else None,
                            "status": e.status})
         # Warm start: the next force samples these amplitudes first.

@@ -189,8 +189,24 @@ def _find(dp, prog, S, seeds, grid):
         return cache[s]
 
     pts = np.union1d(np.linspace(-S, S, grid), seeds[np.abs(seeds) <= S])
-    vals = [(s, dF(float(s))) for s in pts]
-    vals = [(s, v) for s, v in vals if math.isfinite(v[0])]  # an obstacle bounds s
+    vals = [(float(s), dF(float(s))) for s in pts]
+    # An obstacle bounds the amplitudes (a beam lying flat on it has the smallest):
+    # where the grid steps from infeasible to feasible, the boundary is found by
+    # bisection and sampled just inside, else a beam pressed onto the obstacle
+    # (a zero of F' right next to the boundary, where F' falls steeply) is missed.
+    extra = []
+    for (a, va), (b, vb) in zip(vals[:-1], vals[1:]):
+        if math.isfinite(va[0]) != math.isfinite(vb[0]):
+            inside, outside = (b, a) if math.isfinite(vb[0]) else (a, b)
+            for _ in range(40):
+                mid = 0.5 * (inside + outside)
+                if math.isfinite(dF(mid)[0]):
+                    inside = mid
+                else:
+                    outside = mid
+            extra.append((inside, dF(inside)))
+    vals = sorted([(s, v) for s, v in vals + extra if math.isfinite(v[0])],
+                  key=lambda item: item[0])
     if not vals:
         raise SceneError("scene", "no admissible amplitude of the buckling mode (no solve "
                          "succeeded)")

@@ -1,0 +1,118 @@
+"""The global method above the convexity limit: cost against certified gap and mesh size, and paths.
+
+    python benchmarks/nonconvex.py table [--output docs/nonconvex-benchmark.md]
+    python benchmarks/nonconvex.py paths [--output docs/nonconvex-paths.png] [--elements 12]
+
+``table``: for each scene and mesh, the global method's run time, node
+programs, unstable modes and certified gap (in J and relative to the energy
+scale, the sum of |energy parts|), with its status.  ``paths``: the
+equilibrium path of each support (P1..P4) with and without a transverse load,
+and of P4 on a foundation and on an obstacle, from tension to 3 P_bar (forces
+with two unstable modes are left out: equilibria are found for one).
+"""
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from gaocvx import DiscreteProblem, Scene, solve
+
+BEAM = {"length": 1.0, "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1, "width": 1.0}
+
+
+def scene(supports, q=None, axial=0.0, n=16, foundation=None, obstacle=None, points=()):
+    d = {"beam": {**BEAM, "model": "gao", "supports": supports},
+         "load": {"axial": axial, "points": [list(p) for p in points]}, "mesh": {"elements": n}}
+    if q is not None:
+        d["load"]["q"] = q
+    if foundation:
+        d["foundation"] = {"gap": foundation[0], "stiffness": foundation[1]}
+    if obstacle is not None:
+        d["obstacle"] = {"gap": obstacle}
+    return Scene.from_dict(d)
+
+
+CASES = [
+    ("P4, q = -1e7 N/m, P = 1.3e9 N (nonconvex.md)", dict(supports="P4", q=-1e7, axial=1.3e9)),
+    ("P4, q = 0, P = 1.3e9 N (mirror images)", dict(supports="P4", axial=1.3e9)),
+    ("P1, q = -5e7 N/m, P = 1.1e10 N (k = 2)", dict(supports="P1", q=-5e7, axial=1.1e10)),
+    ("P3, tip force -1e5 N, P = 6e8 N", dict(supports="P3", points=[(1.0, -1e5)], axial=6e8)),
+    ("P2, foundation 2 mm / 1e10, P = 4e9 N", dict(supports="P2", q=-2e7, axial=4e9,
+                                                    foundation=(0.002, 1e10))),
+    ("P4, obstacle 1 cm, q = -1e8 N/m, P = 1.5e9 N", dict(supports="P4", q=-1e8, axial=1.5e9,
+                                                         obstacle=0.01)),
+]
+
+
+def table(out):
+    lines = ["| scene | N | k | nodes | time [s] | gap [J] | gap / scale | unique | status |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for label, kw in CASES:
+        for n in (8, 16, 32, 64, 128):
+            s = scene(n=n, **kw)
+            t0 = time.perf_counter()
+            r = solve(s, "global")
+            t = time.perf_counter() - t0
+            g = r.extra["global"]
+            scale = sum(abs(v) for v in r.energy_parts.values())
+            lines.append(f"| {label} | {n} | {g['unstable_modes']} | {g['nodes']} | {t:.2f} | "
+                         f"{g['bound_gap']:.2e} | {g['bound_gap'] / scale:.1e} | "
+                         f"{'yes' if g['unique'] else 'no'} | {r.status} |")
+            print(lines[-1], file=sys.stderr, flush=True)
+    text = "\n".join(lines) + "\n"
+    if out:
+        Path(out).write_text(text)
+    print(text)
+
+
+def paths(out, n):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from gaocvx.nonconvex import equilibrium_path
+    from gaocvx.nonconvex.pictures import draw_path
+
+    panels = [(f"{sup}, q = {q:g} N/m" if q else f"{sup}, q = 0", dict(supports=sup, q=q))
+              for sup in ("P1", "P2", "P3", "P4") for q in (0.0, -1e7)]
+    panels += [("P4, q = -1e7 N/m, foundation 1 cm, k_F = 1e9 N/m^2",
+                dict(supports="P4", q=-1e7, foundation=(0.01, 1e9))),
+               ("P4, q = -1e7 N/m, obstacle 1 cm", dict(supports="P4", q=-1e7, obstacle=0.01))]
+    fig, axes = plt.subplots(5, 2, figsize=(10, 19))
+    for ax, (label, kw) in zip(axes.ravel(), panels):
+        t0 = time.perf_counter()
+        base = scene(n=n, q=kw.get("q") or None,
+                     **{k: v for k, v in kw.items() if k != "q"})
+        P_bar = DiscreteProblem(base, check_convexity=False).P_bar_h
+        P = np.linspace(-0.5 * P_bar, 3.0 * P_bar, 36)
+        path = equilibrium_path(base, P)
+        draw_path(ax, path)
+        ax.axhline(P_bar, color="0.5", lw=0.8, ls=":", label="P_bar_h")
+        if path.errors:
+            first = min(path.errors)
+            ax.axhspan(first, P[-1], color="0.92", zorder=-1, label="2 unstable modes (not traced)")
+        ax.set_title(label, fontsize=9)
+        ax.legend(fontsize=7, loc="lower right")
+        print(f"{label}: {len(path.points)} equilibria, {len(path.errors)} forces skipped, "
+              f"{time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
+    fig.tight_layout()
+    fig.savefig(out, dpi=80)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("what", choices=["table", "paths"])
+    ap.add_argument("--output")
+    ap.add_argument("--elements", type=int, default=12)
+    args = ap.parse_args(argv)
+    if args.what == "table":
+        table(args.output)
+    else:
+        paths(args.output or "docs/nonconvex-paths.png", args.elements)
+
+
+if __name__ == "__main__":
+    main()
