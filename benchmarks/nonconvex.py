@@ -8,7 +8,7 @@ programs, unstable modes and certified gap (in J and relative to the energy
 scale, the sum of |energy parts|), with its status.  ``paths``: the
 equilibrium path of each support (P1..P4) with and without a transverse load,
 and of P4 on a foundation and on an obstacle, from tension to 3 P_bar (forces
-with two unstable modes are left out: equilibria are found for one).
+with three unstable modes would be left out: equilibria are found for one or two).
 """
 
 import argparse
@@ -93,7 +93,7 @@ def paths(out, n):
         ax.axhline(P_bar, color="0.5", lw=0.8, ls=":", label="P_bar_h")
         if path.errors:
             first = min(path.errors)
-            ax.axhspan(first, P[-1], color="0.92", zorder=-1, label="2 unstable modes (not traced)")
+            ax.axhspan(first, P[-1], color="0.92", zorder=-1, label="3 unstable modes (not traced)")
         ax.set_title(label, fontsize=9)
         ax.legend(fontsize=7, loc="lower right")
         print(f"{label}: {len(path.points)} equilibria, {len(path.errors)} forces skipped, "

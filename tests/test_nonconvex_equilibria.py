@@ -133,3 +133,18 @@ def test_cli_equilibria_and_path(tmp_path, capsys):
     assert rows[0].startswith("P,w_c") and len(rows) == 1 + 1 + 1 + 3
     assert len(out.splitlines()) == 5
     assert main(["path", str(path), "--axial", "0:2e9"]) == 2
+
+
+@pytest.mark.parametrize("q", [None, -5e7])
+def test_two_unstable_modes(q):
+    """P1 above its second mode load: each equilibrium found is one (independent gradient
+    and Hessian), the lowest is the independent multi-start's minimum."""
+    from test_nonconvex import multistart
+    scene = Scene.from_dict(scene_dict("P1", q=q, axial=1.1e10, elements=8))
+    eqs = equilibria(scene)
+    assert all(e.status == "optimal" for e in eqs) and len(eqs[0].amplitudes) == 2
+    independent_check(scene, eqs)
+    W = max(np.max(np.abs(e.w)) for e in eqs)
+    assert eqs[0].stable and multistart(scene, W) == pytest.approx(eqs[0].energy, rel=1e-9)
+    if q is None:   # 0 (a maximum of F), two mirror minima, two mirror saddles
+        assert len(eqs) == 5 and sum(e.stable for e in eqs) == 2 and eqs[-1].energy == 0.0

@@ -1,4 +1,5 @@
-"""Every equilibrium of a beam above the convexity limit (k = 1 unstable mode).
+"""Every equilibrium of a beam above the convexity limit (k = 1 unstable mode; k = 2 in
+:mod:`.stationary2`).
 
 At an equilibrium the gradient in the stable directions vanishes, and for
 given amplitudes ``s`` of the unstable modes the energy is strictly convex in
@@ -164,17 +165,19 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID) -
     modes = unstable_modes(dp)
     if modes.k == 0:
         modes = unstable_modes(dp, min_k=1)
-    if modes.k > 1:
+    if modes.k > 2:
         raise SceneError("load.axial", f"P = {dp.P:.4g} N leaves {modes.k} unstable buckling "
-                         "modes; all equilibria are found for one (P below the second mode "
-                         f"load {float(modes.loads[1]) if modes.k > 1 else math.nan:.4g} N)",
-                         dp.P)
+                         "modes; equilibria are searched for one or two (P below the third "
+                         f"mode load {float(modes.loads[2]):.4g} N)", dp.P)
     dp = rescale_for(dp, modes)
     prog = NodeProgram(dp, modes)
     # (with a bonded foundation the modes' lambda_1 is that of K + c M: no bound
     # of u'K u / t, so none is used; equilibrium_box counts the foundation itself)
     lam1 = 0.0 if getattr(dp, "bilateral", False) else float(modes.lam[0]) * (1.0 - 1e-9)
     S = float(equilibrium_box(dp, lam1))
+    if modes.k == 2:
+        from .stationary2 import find_plane
+        return find_plane(dp, prog, S)
     return _find(dp, prog, S, np.asarray(seeds, float) / dp.W, grid)
 
 
