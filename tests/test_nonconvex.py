@@ -322,3 +322,20 @@ def test_buckled_example_states_what_an_independent_search_finds():
     found = multistart(scene, 0.04)
     assert found == pytest.approx(r.energy, rel=1e-9)
     assert found == pytest.approx(-4.1604e5, rel=1e-4) and r.min["w"] == pytest.approx(-0.03664, rel=1e-3)
+
+
+@pytest.mark.slow
+def test_mesh_convergence_of_the_buckled_energy_and_shape():
+    """nonconvex.md's example on 8..64 elements: the certified minima converge with h^4
+    (Hermite cubics), fitted from successive differences."""
+    energies, mids = [], []
+    for n in (8, 16, 32, 64):
+        r = solve(p4(elements=n), "global")
+        assert r.status == "optimal"
+        energies.append(r.energy)
+        mids.append(r.deflection(0.5))
+    d = np.abs(np.diff(energies))
+    orders = np.log2(d[:-1] / d[1:])
+    assert np.all((orders > 3.5) & (orders < 4.5)), orders
+    dw = np.abs(np.diff(mids))
+    assert np.all(np.log2(dw[:-1] / dw[1:]) > 3.0), dw
