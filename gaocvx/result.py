@@ -314,7 +314,7 @@ class Result:
                 **({} if self.contact_forces is None
                    else {"forces": self.contact_forces.tolist()}),
             },
-            "support_reactions": self.support_reactions,
+            "support_reactions": [dict(s) for s in self.support_reactions],  # copies: cached
             "P_bar": float(self.P_bar),
             **({} if self.P_hat is None else {"P_hat": self.P_hat}),
             "time_s": float(self.time_s),
