@@ -111,7 +111,9 @@ def test_compare_names_both_contact_zones_and_draws_one_wall_per_support():
     d = scene_dict("P1", "gao", q=-5e8, foundation=(0.007, 5e8), elements=16)
     results = {m: solve(Scene.from_dict({**d, "beam": {**d["beam"], "model": m}}))
                for m in ("euler-bernoulli", "gao")}
-    ax = compare_figure(results).axes[0]
+    fig = compare_figure(results)
+    assert outside(fig) == []
+    ax = fig.axes[0]
     legend = [t.get_text() for t in ax.get_legend().get_texts()]
     for model, r in results.items():
         a, b = r.zones[0]
@@ -140,6 +142,7 @@ def _rows(scene, key, spec):
 def test_sweep_axis_has_the_unit_and_no_contact_panel_without_contact():
     scene = Scene.from_dict(scene_dict("P4", "euler-bernoulli", elements=8))
     fig = sweep_figure(_rows(scene, "load.axial", "-1e9:1e9:5"), "load.axial", scene=scene)
+    assert outside(fig) == []
     assert len(fig.axes) == 2   # max |w| and energy; no contact panel
     assert fig.axes[-1].get_xlabel() == "load.axial [N]"
     # P_bar_h is marked: pi^2 EI / L^2 for P4 (the discrete limit lies a little above).
