@@ -70,6 +70,8 @@ TOUCH_TOL = 1e-9
 # one (measured: at 1e-8 the method of multipliers no longer certifies a flexible
 # beam lying flat on a gap-0 obstacle).
 ZERO_ANSWER = 1e-6
+# "In contact" with a rigid obstacle: a gap within this fraction of the answer's size.
+OBSTACLE_CONTACT_TOL = 1e-6
 
 
 def complementarity(lam, gap, scale, size) -> float:

@@ -41,7 +41,7 @@ import scipy.sparse as sp
 
 from . import fem
 from .cache import LRU
-from .discrete import CONTACT_POINTS, GAO_POINTS, ZERO_ANSWER, DiscreteProblem
+from .discrete import CONTACT_POINTS, GAO_POINTS, OBSTACLE_CONTACT_TOL, ZERO_ANSWER, DiscreteProblem
 
 __all__ = ["MixedForm", "MixedStructure", "Hessian", "structure_of", "structure_key",
            "clear_cache"]
@@ -631,6 +631,19 @@ class MixedForm:
     def no_contact_forces(self) -> np.ndarray | None:
         """Obstacle multipliers that are all zero (None without an obstacle)."""
         return np.zeros(self.A.shape[0]) if self.dp.contact == "obstacle" else None
+
+    def in_contact(self, z, lam) -> tuple[np.ndarray, np.ndarray]:
+        """Obstacle rows (touching, carrying a force) at ``z`` with multipliers ``lam``.
+
+        Touching: within OBSTACLE_CONTACT_TOL of the answer's size.  Carrying: a
+        force counts against the load it balances (interior-point multipliers
+        of a beam that lifts off are ~1e-13 of it, not zero).
+        """
+        size = self.deflection_size(z)
+        carrying = lam > 1e-9 * max(float(np.sum(np.abs(self.f))), float(np.sum(np.abs(lam))),
+                                    1e-300)
+        touching = (self.gap(z) <= OBSTACLE_CONTACT_TOL * size) | carrying
+        return touching, carrying
 
     def deflection_size(self, z) -> float:
         """The answer's own size: its largest nodal |w| (non-dimensional), at least :attr:`zero_floor`."""

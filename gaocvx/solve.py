@@ -31,8 +31,6 @@ from .scene import METHODS, Scene, check_solve_arguments
 
 __all__ = ["solve", "choose_method", "make_result", "cvm_verdict"]
 
-# Tolerance (relative to the deflection scale) for "in contact" with a rigid obstacle.
-OBSTACLE_CONTACT_TOL = 1e-6
 # The exact methods re-solve in the answer's own scale when it differs from the
 # first guess by more than this factor (see _solve_exact).
 RESCALE = 10.0
@@ -275,12 +273,7 @@ def _obstacle_contact(dp: DiscreteProblem, raw: dict, w) -> tuple:
     """
     mf, lam, z = raw["mixed"], raw["lam"], raw["z"]
     to_newton = dp.E0 / dp.W / dp.scene.beam.load_factor  # multiplier -> force [N]
-    gap = mf.gap(z)
-    size = mf.deflection_size(z)
-    # A force counts against the load it balances: interior-point multipliers
-    # of a beam that lifts off are ~1e-13 of it, not zero.
-    carrying = lam > 1e-9 * max(float(np.sum(np.abs(mf.f))), float(np.sum(np.abs(lam))), 1e-300)
-    touching = (gap <= OBSTACLE_CONTACT_TOL * size) | carrying
+    touching, carrying = mf.in_contact(z, lam)
     signed = lam.copy()
     points = mf.con_points
     supported = np.setdiff1d(np.arange(dp.n_nodes), dp.free[dp.free % 2 == 0] // 2)
