@@ -21,6 +21,7 @@ certified with.
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 
@@ -31,6 +32,8 @@ from .discrete import (COMPLEMENTARITY_TOL, FEASIBILITY_TOL, STATIONARITY_TOL, D
 from .mixed import MixedForm
 
 __all__ = ["solve_newton", "certify", "passes", "line_search", "answer"]
+
+log = logging.getLogger(__name__)
 
 # Newton converges quadratically: it stops at round-off (a decrement that stops
 # falling fast once below ROUNDOFF), not at the certificate's tolerance, so that
@@ -150,6 +153,9 @@ def solve_newton(dp: DiscreteProblem, warm: dict | None = None, tol: float = TOL
                 best = (merit, *last, residual)
             else:
                 stalled += 1
+        log.info("newton: multiplier update %d (penalty %.1e): %d iterations, feasibility "
+                 "%.1e, stationarity %s", outer, rho, nit, residual["feasibility"],
+                 f"{residual['stationarity']:.1e}" if "stationarity" in residual else "-")
         # Done when within the margins, or when a best within ten times them has
         # not been halved for three updates (round-off, or a slow crawl: a stiffer
         # penalty only hurts).
@@ -225,6 +231,7 @@ def _newton(mf: MixedForm, z, tol, max_iter, al):
         H = mf.hessian(z, **al)
         d, mu = mf.kkt_solve(H, -g, -mf.link(z))
         decrement = _decrement(d, H, mf.scale(z, H))
+        log.debug("newton iteration %d: decrement %.2e", it, decrement)
         if decrement <= tol:
             return z, it - 1, "Newton decrement below tolerance"
         used = None

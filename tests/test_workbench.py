@@ -237,3 +237,14 @@ def test_solve_docstring_lists_every_method():
     section = doc[doc.index("method :"):doc.index("elements :")]
     for method in METHODS:
         assert f'"{method}"' in section, method
+
+
+def test_verbose_logs_the_progress_of_a_long_solve(caplog):
+    """-v (INFO) shows the method of multipliers' updates inside one Newton solve."""
+    import logging
+
+    from gaocvx import load_scene, solve
+    with caplog.at_level(logging.INFO, logger="gaocvx"):
+        solve(load_scene("examples/pinned_obstacle_point.toml"), "newton")
+    updates = [r for r in caplog.records if "multiplier update" in r.getMessage()]
+    assert len(updates) >= 2 and "feasibility" in updates[-1].getMessage()
