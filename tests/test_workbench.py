@@ -245,6 +245,8 @@ def test_verbose_logs_the_progress_of_a_long_solve(caplog):
 
     from gaocvx import load_scene, solve
     with caplog.at_level(logging.INFO, logger="gaocvx"):
-        solve(load_scene("examples/pinned_obstacle_point.toml"), "newton")
+        from pathlib import Path
+        examples = Path(__file__).parent.parent / "examples"
+        solve(load_scene(examples / "pinned_obstacle_point.toml"), "newton")
     updates = [r for r in caplog.records if "multiplier update" in r.getMessage()]
     assert len(updates) >= 2 and "feasibility" in updates[-1].getMessage()
