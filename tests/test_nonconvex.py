@@ -339,3 +339,28 @@ def test_mesh_convergence_of_the_buckled_energy_and_shape():
     assert np.all((orders > 3.5) & (orders < 4.5)), orders
     dw = np.abs(np.diff(mids))
     assert np.all(np.log2(dw[:-1] / dw[1:]) > 3.0), dw
+
+
+@pytest.mark.parametrize("kw", [dict(q=-1e7, axial=1.3e9),
+                                dict(q=-2e7, axial=3e9, foundation=(0.002, 1e10))])
+def test_fast_path_agrees_with_the_dense_programs_and_reaches_fine_meshes(kw):
+    from gaocvx import DiscreteProblem
+    from gaocvx.nonconvex.minimum import solve_global
+
+    out = {}
+    for fast in (False, True):
+        dp = DiscreteProblem(Scene.from_dict(scene_dict("P4", elements=32, **kw)),
+                             check_convexity=False)
+        dp, raw, info = solve_global(dp, fast=fast)
+        assert raw["status"] == "optimal"
+        out[fast] = (dp.to_physical(raw["u"])[0], info["lower_bound"],
+                     sum(raw["mixed"].energy_parts(raw["z"]).values()) * dp.E0)
+    (w0, lo0, e0), (w1, lo1, e1) = out[False], out[True]
+    assert abs(e1 - e0) <= 1e-10 * abs(e0) and np.max(np.abs(w1 - w0)) <= 1e-8 * np.max(np.abs(w0))
+    # each method's lower bound lies below the other's minimum
+    assert lo0 <= e1 and lo1 <= e0
+    # beyond the dense programs (128 elements) auto takes the fast path; h^4 convergence
+    r = solve(Scene.from_dict(scene_dict("P4", elements=256, **kw)))
+    assert r.method == "global" and r.status == "optimal"
+    r64 = solve(Scene.from_dict(scene_dict("P4", elements=64, **kw)))
+    assert abs(r.energy - r64.energy) <= abs(r64.energy - e0) / 10

@@ -32,6 +32,9 @@ log = logging.getLogger(__name__)
 # Branch and bound splits a k-dimensional box: beyond a few modes the number of
 # node programs explodes (measured: 1 mode ~50 nodes, 2 modes ~500).
 MAX_MODES = 3
+# The fast path (one mode, no obstacle) beyond the dense programs' 128 elements: the
+# modes come from a dense eigen-solve (gaocvx.nonconvex.modes), affordable up to here.
+MAX_FAST_ELEMENTS = 512
 # The continuum P_bar lies below P_bar_h (Rayleigh-Ritz); below this fraction of it
 # no mesh needs a look (EFFECTIVE_LENGTH of P2 is 2e-6 off the exact root).
 _CONTINUUM_MARGIN = 1e-4
@@ -96,10 +99,11 @@ def solve_global_result(scene, elements=None, problem=None, solver=None):
         return make_result(dp, raw, "global", time.perf_counter() - t0, extra={"global": info})
     check_bounded(dp)
     n_el = dp.n_nodes - 1
-    if n_el > MAX_ELEMENTS:
+    if n_el > MAX_ELEMENTS and (dp.contact == "obstacle" or n_el > MAX_FAST_ELEMENTS):
         raise SceneError("load.axial", f"{_statement(dp)}; above it the global method's dense "
-                         f"node programs take at most {MAX_ELEMENTS} elements "
-                         f"(mesh.elements = {n_el})", dp.P)
+                         f"node programs take at most {MAX_ELEMENTS} elements, its fast path "
+                         f"{MAX_FAST_ELEMENTS} without an obstacle (mesh.elements = {n_el})",
+                         dp.P)
     modes = unstable_modes(dp)
     if modes.k > MAX_MODES:
         raise SceneError("load.axial", f"{_statement(dp)}, with {modes.k} unstable buckling modes; "

@@ -148,7 +148,7 @@ def _minimise_reduced(prog, s, lo, hi):
 def _feasible_energy(dp, prog):
     """The energy of free DOFs ``u``; inf where an obstacle is violated beyond round-off."""
     if prog.rows is None:
-        return dp.energy
+        return getattr(prog, "energy", dp.energy)
 
     def energy(u):
         gap = prog.rows @ u - prog.levels
@@ -224,7 +224,12 @@ def _polish(dp, prog, s, u, lam, lo, hi):
     return s, u, lam
 
 
-def solve_global(dp, modes=None, max_nodes: int = MAX_NODES) -> tuple:
+def fast_eligible(dp, k: int) -> bool:
+    """The fast path (:mod:`.fast`) serves one unstable mode without an obstacle."""
+    return k == 1 and dp.contact != "obstacle"
+
+
+def solve_global(dp, modes=None, max_nodes: int = MAX_NODES, fast: bool | None = None) -> tuple:
     """The certified global minimiser of ``dp`` (``P >= P_bar_h``, ``k >= 1`` unstable modes).
 
     Parameters
@@ -235,6 +240,9 @@ def solve_global(dp, modes=None, max_nodes: int = MAX_NODES) -> tuple:
         Its unstable modes (computed when not given).
     max_nodes : int
         Node programs at most.
+    fast : bool, optional
+        Node problems through the banded Newton machinery (:mod:`.fast`); by
+        default beyond MAX_ELEMENTS, where the dense programs stop.
 
     Returns
     -------
@@ -256,13 +264,16 @@ def solve_global(dp, modes=None, max_nodes: int = MAX_NODES) -> tuple:
     t0 = time.perf_counter()
     check_bounded(dp)
     n_el = dp.n_nodes - 1
-    if n_el > MAX_ELEMENTS:
-        raise SceneError("mesh.elements", f"the global method's dense node programs take at most "
-                         f"{MAX_ELEMENTS} elements", n_el)
     modes = modes if modes is not None else unstable_modes(dp)
+    if fast is None:
+        fast = n_el > MAX_ELEMENTS
+    if n_el > MAX_ELEMENTS and not fast_eligible(dp, modes.k):
+        raise SceneError("mesh.elements", f"the global method's dense node programs take at most "
+                         f"{MAX_ELEMENTS} elements (beyond, one unstable mode without an obstacle "
+                         "only)", n_el)
     dp = rescale_for(dp, modes)
     for attempt in range(2):
-        raw, info, size = _run(dp, modes, max_nodes, t0)
+        raw, info, size = _run(dp, modes, max_nodes, t0, fast)
         if attempt or 0.1 <= size <= 10.0 or not math.isfinite(size) or size == 0:
             break
         log.info("global: re-solving in the answer's own scale (size %.3g W)", size)
@@ -270,9 +281,13 @@ def solve_global(dp, modes=None, max_nodes: int = MAX_NODES) -> tuple:
     return dp, raw, info
 
 
-def _run(dp, modes, max_nodes, t0):
+def _run(dp, modes, max_nodes, t0, fast=False):
     k = modes.k
-    prog = NodeProgram(dp, modes)
+    if fast:
+        from .fast import FastProgram
+        prog = FastProgram(dp, modes)
+    else:
+        prog = NodeProgram(dp, modes)
     # A first upper bound: w = 0 and the one-mode estimate on either side.
     A = one_mode_amplitude(dp, modes)
     start = (0.0, np.zeros(dp.n), np.zeros(k), None)
