@@ -109,7 +109,7 @@ class FastProgram:
             z = z + t * d
             # Converged at round-off: a decrement (squared energy-norm step) below
             # 1e-16 of the energy that no longer falls quadratically, or a step
-            # below round-off.  (At 256 elements the decrement's floor is ~1e-20.)
+            # below round-off (the decrement's round-off floor grows with N).
             small = abs(dec) <= 1e-16 * max(abs(e0), 1e-300)
             if (small and (abs(dec) > 0.01 * previous or abs(dec) <= 1e-26 * abs(e0))) or \
                     np.linalg.norm(t * d) <= 1e-15 * max(np.linalg.norm(z), 1e-300):
