@@ -61,7 +61,8 @@ def test_set_and_elements(capsys, scene):
 
 
 @pytest.mark.parametrize("argv, key", [
-    (["--set", "load.axial=5e9"], "load.axial"),
+    # above P_bar_h: the convex methods refuse it (auto solves it globally, below)
+    (["--set", "load.axial=5e9", "--method", "newton"], "load.axial"),
     (["--set", "beam.nu=0.7"], "beam.nu"),
     (["--set", "beam.colour=1"], "beam.colour"),
     (["--set", "obstacle.gap=0.01"], "obstacle"),
@@ -79,9 +80,15 @@ def test_bad_input_exit_2_names_key(capsys, scene, argv, key):
 
 
 def test_convexity_limit_message(capsys, scene):
-    code, _, err = run(capsys, "solve", scene, "--set", "load.axial=5e9")
-    assert code == 2
-    assert "P_bar_h = 4.672e+09 N for P1" in err and "(got 5e+09)" in err
+    """Newton and convex refuse P >= P_bar_h with the limit in the message; auto takes the
+    certified global method there (issue 10) instead of refusing."""
+    for method in ("newton", "convex"):
+        code, _, err = run(capsys, "solve", scene, "--set", "load.axial=5e9", "--method", method)
+        assert code == 2
+        assert "P_bar_h = 4.672e+09 N for P1" in err and "(got 5e+09)" in err
+    code, out, _ = run(capsys, "solve", scene, "--set", "load.axial=5e9", "--json")
+    data = json.loads(out)
+    assert data["method"] == "global" and data["global"]["unstable_modes"] >= 1
 
 
 def test_several_scenes_json_lines(capsys, scene, tmp_path):
