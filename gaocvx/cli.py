@@ -120,8 +120,6 @@ def _cmd_solve(args) -> int:
     from .solve import solve
 
     overrides = _overrides(args)
-    # "global" is the solve() method of gaocvx.nonconvex, not a scene key's value.
-    method = overrides.pop("solve.method") if overrides.get("solve.method") == "global" else None
     several = len(args.scenes) > 1
     panels = [p.strip() for p in (args.panels or "").split(",") if p.strip()]
     if args.plot:
@@ -135,7 +133,7 @@ def _cmd_solve(args) -> int:
             log.info("%s: solving (%s, supports %s, %d elements, method %s)", path,
                      scene.beam.model, scene.beam.supports, scene.mesh.elements,
                      scene.solve.method)
-            result = solve(scene, method)
+            result = solve(scene)
             record.update(result.to_dict())
             if not result.success:
                 code = EXIT_SOLVER

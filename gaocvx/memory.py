@@ -9,9 +9,8 @@ measured for a Gao beam (P1, uniform load), per element:
   32768 elements; 4.4, 7.8 and 9.3 kB at 262144;
 - convex (Clarabel): 41 kB (foundation) and 35 kB (obstacle) at 32768
   elements, 39 kB at 131072 (foundation), 165 kB at 512 (fixed costs);
-- cvm, which also solves its convex ground truth: 110 kB at 1024, 199 kB at
-  4096, 396 kB at 8192 elements (3.3 GB): it grows like ``a N + b N^2``
-  with a = 69 kB and b = 40 B.
+- cvm (matrix-free projected Newton, and the Newton ground truth of its
+  verdict): 6.3 kB at 4096 and 6.5 kB at 16384 elements (Gao P1, no contact).
 
 The constants below round these up by about a quarter.  The estimates are
 rough on purpose (within a factor of about two): they exist to refuse meshes
@@ -36,10 +35,8 @@ __all__ = ["estimate_memory", "available_memory", "max_elements_that_fit", "chec
 _PER_ELEMENT = {
     "newton": {None: 6e3, "foundation": 1.0e4, "obstacle": 1.2e4},
     "convex": {None: 7e4, "foundation": 7e4, "obstacle": 6e4},
-    "cvm": {None: 9e4, "foundation": 9e4, "obstacle": 9e4},
+    "cvm": {None: 8e3, "foundation": 1.2e4, "obstacle": 1.2e4},
 }
-# CVM's quadratic part [bytes / element^2] (fitted: 40).
-_CVM_QUADRATIC = 50.0
 # Fixed overhead of a solve beyond the imported package (matrices' index arrays,
 # compiled programs, solver workspaces at small sizes).
 _BASE = 50e6
@@ -66,8 +63,6 @@ def estimate_memory(elements: int, method: str = "auto", contact: str | None = N
     table = _PER_ELEMENT.get(method, _PER_ELEMENT["newton"])
     per = table.get(contact, max(table.values()))
     total = _BASE + per * n
-    if method == "cvm":
-        total += _CVM_QUADRATIC * n * n
     return total
 
 

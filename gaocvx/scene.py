@@ -48,7 +48,7 @@ __all__ = [
 
 MODELS = ("gao", "euler-bernoulli")
 SUPPORTS = ("P1", "P2", "P3", "P4")
-METHODS = ("auto", "convex", "newton", "cvm")
+METHODS = ("auto", "convex", "newton", "cvm", "global")
 TRANSFORMS = ("auto", "T1", "T2", "T3")
 CONTROLS = ("P1", "full")
 FOUNDATION_KINDS = ("unilateral", "bilateral")

@@ -27,7 +27,7 @@ from .discrete import DiscreteProblem
 from .errors import SceneError, SolverError
 from .newton import solve_newton
 from .result import Result, contact_zones
-from .scene import METHODS, Scene, check_solve_arguments
+from .scene import Scene, check_solve_arguments
 
 __all__ = ["solve", "choose_method", "make_result", "cvm_verdict"]
 
@@ -91,11 +91,8 @@ def solve(scene: Scene, method: str | None = None, *, elements: int | None = Non
         If the method returns no solution at all.  A solution that fails its
         optimality test is returned with ``status == "inaccurate"``.
     """
-    # "global" (gaocvx.nonconvex) is checked here, not among the scene's METHODS.
-    scene = check_solve_arguments(scene, None if method == "global" else method, elements, solver)
+    scene = check_solve_arguments(scene, method, elements, solver)
     t0 = time.perf_counter()
-    if method is not None and method not in (*METHODS, "global"):
-        raise SceneError("solve.method", "must be one of " + ", ".join(map(repr, METHODS)), method)
     chosen = choose_method(scene, method, elements)
     if chosen == "global":
         from .nonconvex import solve_global_result

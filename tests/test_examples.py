@@ -139,3 +139,14 @@ def test_channel_touches_below_and_above():
     assert R[0] == pytest.approx(1.470e7, rel=1e-3) and R[1] == pytest.approx(-1.947e7, rel=1e-3)
     assert np.abs(r.deflection(np.linspace(0, 1, 201)) - exact(np.linspace(0, 1, 201))).max() \
         <= 2e-5 * 1e-3
+
+
+def test_buckled_pinned_is_solved_globally():
+    """Above P_bar_h auto takes the certified global method; the stated minimiser is the
+    one an independent multi-start search finds (test_nonconvex.py::
+    test_buckled_example_states_what_an_independent_search_finds)."""
+    r = run("buckled_pinned.toml")
+    assert r.method == "global" and r.extra["global"]["unstable_modes"] == 1
+    assert r.P_bar < r.scene.load.axial
+    assert r.deflection(0.5) == pytest.approx(-0.03664, rel=1e-3)
+    assert r.energy == pytest.approx(-4.1604e5, rel=1e-4)
