@@ -179,9 +179,11 @@ class DiscreteProblem:
             if not self.bilateral:
                 raise
             from .foundation_limit import BondedLimit
-            # With a stiffness profile its smallest value proves it for all.
-            c_min = float(np.min(self.c))
-            if not BondedLimit(self.xi, self.scene.beam.supports, c_min).prove_below(self.p):
+            # With a stiffness profile, each element's smallest value at its
+            # quadrature points bounds its foundation term from below.
+            c = self.c if np.ndim(self.c) == 0 else \
+                np.asarray(self.c).reshape(self.n_nodes - 1, CONTACT_POINTS).min(axis=1)
+            if not BondedLimit(self.xi, self.scene.beam.supports, c).prove_below(self.p):
                 raise SceneError(
                     "load.axial", f"P = {self.P:.4g} N is not provably below the convexity "
                     f"limit P_hat_h = {self.P_hat_h:.4g} N of the beam on its bonded "

@@ -57,9 +57,11 @@ PENALTY_TRIES = 6
 class BondedLimit(ConvexityLimit):
     """:class:`~gaocvx.limit.ConvexityLimit` with a bonded foundation ``c`` (non-dimensional)."""
 
-    def __init__(self, xi, supports: str, c: float):
+    def __init__(self, xi, supports: str, c):
         super().__init__(xi, supports)
-        self.cf = float(c)
+        # c per element (a stiffness profile: its smallest value at the element's
+        # quadrature points, a lower bound of its foundation term), or one number.
+        self.cf = np.broadcast_to(np.asarray(c, float), (self.N,)).copy()
         # The deflections carry the foundation: only w_0 (and the fixed slopes) stay fixed.
         keep = [i for i in self.z_fixed if i % 3 != 0 or i in (0, 3 * self.N)]
         if not self.constrained:
@@ -95,9 +97,8 @@ class BondedLimit(ConvexityLimit):
         # Diagonal of w_i (i >= 1): the foundation's c h 156/420 from each element
         # beside it, and the penalty's rho / h from each (the base counted the
         # penalty only where the deflections were variables: the constrained supports).
-        hl = h
-        hr = np.r_[h[1:], 0.0]
-        d_w = self.cf * (156.0 / 420.0) * (hl + hr)
+        # node i + 1 sits between element i (left) and element i + 1 (right)
+        d_w = (156.0 / 420.0) * (self.cf * h + np.r_[self.cf[1:] * h[1:], 0.0])
         if not self.constrained:
             d_w = d_w + self._rho * (inv + np.r_[inv[1:], 0.0])
         S = float(np.sum(d_w * reach))
@@ -110,7 +111,7 @@ class BondedLimit(ConvexityLimit):
         if self.dim == 0 or p <= 0:
             return True
         for k in range(PENALTY_TRIES):
-            self._rho = (10.0 ** k) * 10.0 * max(p, self.cf, 1.0)
+            self._rho = (10.0 ** k) * 10.0 * max(p, float(np.max(self.cf)), 1.0)
             self._factors.clear()
             sigma = p * (1 + 4 * EPS)
             sigma += self.roundoff_shift(sigma)

@@ -280,3 +280,23 @@ def test_p_hat_is_reported():
     assert d["P_hat"] > d["P_bar"] and "P_hat_h" in r.summary()
     unilateral = solve(_with({"foundation": {"gap": 0.0, "stiffness": 5e10}}, n=16), "newton")
     assert "P_hat" not in unilateral.to_dict()
+
+
+def test_bonded_stiffness_profile_is_proved_up_to_its_own_p_hat():
+    """A bonded bed with a stiffness table: the proof takes each element's smallest
+    stiffness, not the whole table's (which refused P at 55 % of P_hat); a P above
+    P_hat is still refused (found by a new-user trial)."""
+    table = [[0.0, 1.5e10], [1.0, 4e10]]
+    data = {"beam": {**BEAM, "model": "gao", "supports": "P2"}, "load": {"q": -2e6},
+            "foundation": {"gap": 0.001, "stiffness": table, "kind": "bilateral"},
+            "mesh": {"elements": 32}}
+    P_hat = DiscreteProblem(Scene.from_dict(data)).P_hat_h
+    uniform_min = {**data, "foundation": {**data["foundation"], "stiffness": 1.5e10}}
+    assert 0.9 * P_hat > DiscreteProblem(Scene.from_dict(uniform_min)).P_hat_h
+    data["load"]["axial"] = 0.9 * P_hat
+    a, b = (solve(Scene.from_dict(data), m) for m in (None, "convex"))   # auto: Newton
+    assert a.success and b.success and a.method == "newton"
+    assert np.abs(a.w - b.w).max() <= 2e-6 * np.abs(a.w).max()
+    data["load"]["axial"] = 1.001 * P_hat
+    with pytest.raises(SceneError):
+        solve(Scene.from_dict(data), "newton")
