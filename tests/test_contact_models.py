@@ -152,9 +152,9 @@ def test_bonded_foundation_on_a_ramp_is_the_closed_form(supports):
         assert np.abs(r.w - exact).max() <= 1e-6 * np.abs(exact).max()
 
 
-def test_obstacle_dent_touches_its_corners():
-    """A flat-bottomed dent in the obstacle (a table): the answer lies on or above the
-    profile at every node, touches the dent's corners (which are nodes), and both
+def test_obstacle_plateau_touches_its_corners():
+    """An obstacle raised into a plateau (a table): the answer lies on or above the
+    profile at every node, touches the plateau's corners (which are nodes), and both
     methods agree."""
     dent = [[0.0, 5e-4], [0.4, 2e-4], [0.6, 2e-4], [1.0, 5e-4]]
     obstacle = [solve(_with({"obstacle": {"gap": dent}}, n=40), m) for m in EXACT]

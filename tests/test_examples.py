@@ -104,10 +104,10 @@ def test_bonded_rail_compressed_is_hetenyis():
     assert r.P_hat == pytest.approx(np.pi**2 * EI_THESIS + 5e10 / np.pi**2, rel=1e-6)
 
 
-def test_obstacle_dent_is_a_beam_on_two_props():
+def test_obstacle_plateau_is_a_beam_on_two_props():
     """Touching the corners only: the closed form of the beam with two point forces R
     at 0.4 and 0.6 chosen so that w(0.4) = -0.2 mm (linear in R)."""
-    r = run("obstacle_dent.toml")
+    r = run("obstacle_plateau.toml")
     free = ExactBeam("P4", 1.0, EI_THESIS, -5e7)
     unit = ExactBeam("P4", 1.0, EI_THESIS, 0.0, [(0.4, 1.0), (0.6, 1.0)])
     R = (-2e-4 - free(np.array([0.4]))[0]) / unit(np.array([0.4]))[0]

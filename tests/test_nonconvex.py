@@ -8,6 +8,7 @@ amplitude of nonconvex.md.
 """
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -364,3 +365,14 @@ def test_fast_path_agrees_with_the_dense_programs_and_reaches_fine_meshes(kw):
     assert r.method == "global" and r.status == "optimal"
     r64 = solve(Scene.from_dict(scene_dict("P4", elements=64, **kw)))
     assert abs(r.energy - r64.energy) <= abs(r64.energy - e0) / 10
+
+
+def test_branch_and_bound_time_limit_ends_uncertified(monkeypatch):
+    """A branch and bound out of time stops and says so (inaccurate), never hangs
+    (a Gao beam in a channel above P_bar ran for minutes in a new-user trial)."""
+    import gaocvx.nonconvex.bnb as bnb
+    from gaocvx import load_scene
+    monkeypatch.setattr(bnb, "TIME_LIMIT", 0.0)
+    examples = Path(__file__).parent.parent / "examples"
+    r = solve(load_scene(examples / "buckled_pinned.toml"), "global")
+    assert r.status == "inaccurate" and "stopped at" in r.message

@@ -40,6 +40,7 @@ import heapq
 import itertools
 import logging
 import math
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -47,6 +48,10 @@ import numpy as np
 __all__ = ["Leaf", "BnBResult", "branch_and_bound"]
 
 log = logging.getLogger(__name__)
+
+# Seconds of branch and bound before it stops, uncertified (the answer is then
+# `inaccurate` with the gap reached).
+TIME_LIMIT = 120.0
 
 
 @dataclass
@@ -108,6 +113,9 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
         ``(energy, u, s, lam)`` of a known feasible point (an upper bound).
     """
     c = np.asarray(prog.modes.c, float)
+    # A wall-clock limit: with constraints each node is a solve of its own, and a
+    # gap that closes slowly must end as an uncertified answer, not a hang.
+    deadline = time.perf_counter() + TIME_LIMIT
     best = list(start) if start is not None else [math.inf, None, None, None]
     counter = itertools.count()
     nodes = 0
@@ -138,9 +146,11 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
         lower, _, leaf = open_[0]
         if best[0] - lower <= tol:
             break
-        if nodes >= max_nodes:
+        if nodes >= max_nodes or time.perf_counter() > deadline:
             converged = False
             break
+        if nodes % 100 == 0:
+            log.info("branch and bound: %d nodes, gap %.3g", nodes, best[0] - lower)
         heapq.heappop(open_)
         width = leaf.hi - leaf.lo
         if float(np.sum(c * width**2)) / 4.0 <= max(1e-2 * tol, 0.1 * leaf.noise):

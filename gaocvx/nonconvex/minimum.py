@@ -47,6 +47,7 @@ from ..errors import SceneError
 from ..linalg import BandedCholesky, NotPositiveDefinite
 from ..mixed import MixedForm
 from ..newton import answer, certify, passes
+from . import bnb
 from .bnb import branch_and_bound
 from .bounds import amplitude_box, check_bounded
 from .certificate import contact_polish, psi_certificate
@@ -351,7 +352,8 @@ def _run(dp, modes, max_nodes, t0, fast=False):
     notes = [f"branch and bound: {out.nodes} node programs, certified gap {gap * dp.E0:.3g} J "
              f"({gap / scale:.2g} of the energy scale)"]
     if not out.converged:
-        notes.append(f"stopped at {max_nodes} nodes")
+        notes.append(f"stopped at {out.nodes} nodes (limit {max_nodes} nodes, "
+                     f"{bnb.TIME_LIMIT:g} s)")
     if out.failed:
         notes.append(f"{out.failed} node programs not solved to optimality")
     if not passes(residual):
