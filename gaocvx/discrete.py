@@ -294,7 +294,7 @@ class DiscreteProblem:
         # it anywhere.  g_max, the nearest point of the surface, decides reach.
         if scene.gap is None:
             self.g = 0.0
-        elif scene.has_profile and isinstance((scene.foundation or scene.obstacle).gap, tuple):
+        elif isinstance((scene.foundation or scene.obstacle).gap, tuple):   # a gap profile
             self.g = -scene.gap_at(self._contact_points * self.L) / self.W
         else:
             self.g = -scene.gap / self.W

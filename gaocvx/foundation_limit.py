@@ -43,7 +43,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .limit import _U, BETA, EPS, ConvexityLimit, _GAMMA
+from .limit import _GAMMA, _U, BETA, EPS, ConvexityLimit, _identity_rows
 
 __all__ = ["BondedLimit", "p_hat_h"]
 
@@ -77,14 +77,13 @@ class BondedLimit(ConvexityLimit):
         ab = super()._band(sigma)
         h, N = self.h, self.N
         # (w_e, theta_e, w_e+1, theta_e+1) are z offsets (0, 1, 3, 4) of element e.
-        offs, scale = (0, 1, 3, 4), (1.0, 1.0, 1.0, 1.0)
+        offs = (0, 1, 3, 4)
         for i, a in enumerate(offs):
             for j, b in enumerate(offs):
                 if a <= b:
                     hs = h ** (1 + (i % 2) + (j % 2))   # theta entries carry h each
-                    ab[_U + a - b, b::3][:N] += self.cf * M_REF[i, j] * hs * scale[i] * scale[j]
+                    ab[_U + a - b, b::3][:N] += self.cf * M_REF[i, j] * hs
         # The rows of fixed DOFs were set to the identity by the base; redo it.
-        from .limit import _identity_rows
         _identity_rows(ab, self.z_fixed)
         return ab
 

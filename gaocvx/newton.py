@@ -401,12 +401,12 @@ def _stationarity(mf: MixedForm, z, lam, H) -> float:
     # deflection, relative to the answer's, is measured too.
     size = mf.deflection_size(z)
     if lam is not None:
-        d = _contact_step(mf, z, lam, H, rhs_z, rhs_c, size)
+        d = _contact_step(mf, z, lam, H, rhs_z, rhs_c)
     nodal = float(np.max(np.abs(d[mf.w_index]), initial=0.0)) / size
     return max(decrement / scale, nodal, _axial_sensitivity(mf, z, factor, size))
 
 
-def _contact_step(mf: MixedForm, z, lam, H, rhs_z, rhs_c, size) -> np.ndarray:
+def _contact_step(mf: MixedForm, z, lam, H, rhs_z, rhs_c) -> np.ndarray:
     """The Lagrangian's Newton step with the points in contact held (a stiff penalty).
 
     With the multipliers fixed and nothing holding the contact points, the step
