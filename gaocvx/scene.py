@@ -149,10 +149,11 @@ def _pairs(key: str, value) -> list:
 
 
 def _profile(key: str, value, lo: float, lo_open: bool = False):
-    """A number, or a piecewise-linear table ``[[x, v], ...]`` (a surface profile).
+    """A number, or a piecewise-linear table ``[[x, v], ...]`` (a profile, or a load).
 
     A table has at least two rows, strictly increasing x, and every value in
-    range; between its rows v is linear, beyond them constant.
+    range (``lo=None``: any).  Between its rows v is linear; beyond them a
+    surface profile is constant (:func:`profile_at`) and a load is zero.
     """
     value = _plain(value)
     if not isinstance(value, (list, tuple)):
@@ -330,19 +331,8 @@ class Load:
 
     def __post_init__(self):
         set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731
-        set_("q", _plain(self.q))
-        if self.q is not None:
-            if isinstance(self.q, (list, tuple)):
-                table = _pairs("load.q", self.q)
-                if len(table) < 2:
-                    raise SceneError("load.q", "a table needs at least two [x, q] rows", self.q)
-                for i in range(1, len(table)):
-                    if not table[i][0] > table[i - 1][0]:
-                        raise SceneError(f"load.q[{i}][0]", "table x must be strictly increasing",
-                                         table[i][0])
-                set_("q", tuple(table))
-            else:
-                set_("q", _number("load.q", self.q))
+        if self.q is not None:  # a number, or a table as the surface profiles are
+            set_("q", _profile("load.q", self.q, lo=None))
         points = _plain(self.points)
         if isinstance(points, (list, tuple)) and len(points) > MAX_POINT_FORCES:
             raise SceneError("load.points", f"at most {MAX_POINT_FORCES} point forces "
@@ -491,10 +481,7 @@ class Scene:
         if self.solve.method == "cvm" and self.obstacle is not None:
             raise SceneError("solve.method", "cvm handles a deformable foundation or none, "
                              "not a rigid obstacle", "cvm")
-        if self.load.is_table:
-            for i, (x, _) in enumerate(self.load.q):
-                if not 0.0 <= x <= L:
-                    raise SceneError(f"load.q[{i}][0]", f"x must lie on the beam [0, {L:g}]", x)
+        _check_on_beam("load.q", self.load.q, L)
         for i, (x, _) in enumerate(self.load.points):
             if not 0.0 <= x <= L:
                 raise SceneError(f"load.points[{i}][0]", f"x must lie on the beam [0, {L:g}]", x)
