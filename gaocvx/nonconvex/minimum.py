@@ -348,7 +348,7 @@ def _run(dp, modes, max_nodes, t0, fast=False):
     # (a negative gap would be a bound above an admissible energy: reported as is)
     gap = upper - out.lower
     # The gap is the certificate, however the search ended (the node limit too).
-    ok = -GAP_TOL * scale <= gap <= GAP_TOL * scale and out.failed == 0
+    ok = -GAP_TOL * scale <= gap <= GAP_TOL * scale and out.failed == 0 and modes.verified
     notes = [f"branch and bound: {out.nodes} node programs, certified gap {gap * dp.E0:.3g} J "
              f"({gap / scale:.2g} of the energy scale)"]
     if not out.converged:
@@ -356,6 +356,8 @@ def _run(dp, modes, max_nodes, t0, fast=False):
                      f"{bnb.TIME_LIMIT:g} s)")
     if out.failed:
         notes.append(f"{out.failed} node programs not solved to optimality")
+    if not modes.verified:
+        notes.append(f"the buckling modes failed their checks ({modes.checks})")
     if not passes(residual):
         notes.append("the minimiser's own certificate failed")
     raw = answer(mf, z, lam, residual, "global: " + "; ".join(notes), out.nodes, "clarabel-bnb",
