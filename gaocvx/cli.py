@@ -8,6 +8,7 @@ optimal), 2 bad input, with ``error: <key>: <what> (got <value>)`` on stderr.
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import logging
 import math
@@ -296,15 +297,43 @@ def _with_model(scene, model):
     return Scene.from_dict(data)
 
 
+def _sweep_outcome(key, keys, as_json, value, item):
+    """One sweep value's table row, exit status and JSON line (None without --json)."""
+    from .sweep import summary_row
+    if isinstance(item, Exception):
+        code = EXIT_INPUT if isinstance(item, SceneError) else EXIT_SOLVER
+    else:
+        code = EXIT_OK if item.success else EXIT_SOLVER
+    record = None
+    if as_json:
+        where = ({"value": value, "key": key} if keys is None
+                 else {"value": list(value), "key": list(keys)})
+        record = _dumps({**where, "status": "error", "error": str(item)}
+                        if isinstance(item, Exception) else {**where, **item.to_dict()})
+    return summary_row(value, item, keys), code, record
+
+
 def _cmd_sweep(args) -> int:
     import csv as csvmod
 
-    from .sweep import ProgressBar, parse_range, summary_row, sweep
+    from .sweep import ProgressBar, grid, parse_range, sweep
 
-    if "=" not in args.vary:
-        raise SceneError("--vary", "must be KEY=START:STOP:NUM[:log]", args.vary)
-    key, spec = (s.strip() for s in args.vary.split("=", 1))
-    values = parse_range(spec, "--vary")
+    axes = []
+    for vary in args.vary:
+        if "=" not in vary:
+            raise SceneError("--vary", "must be KEY=START:STOP:NUM[:log]", vary)
+        key, spec = (s.strip() for s in vary.split("=", 1))
+        axes.append((key, spec, parse_range(spec, "--vary")))
+    if len(axes) == 1:
+        key, spec, values = axes[0]
+        keys = None
+    else:  # a grid: every combination, the first key outermost
+        keys = key = tuple(k for k, _, _ in axes)
+        values = grid(*(v for _, _, v in axes))
+        if len(values) > 1_000_000:
+            raise SceneError("--vary", "a grid of at most 10^6 points", len(values))
+        if args.plot and len(axes) != 2:
+            raise SceneError("--plot", "a map needs exactly two --vary keys", list(keys))
     if args.jobs < 1:
         raise SceneError("--jobs", "must be at least 1", args.jobs)
     scene = _load(args)
@@ -312,39 +341,40 @@ def _cmd_sweep(args) -> int:
         _check_output("--csv", args.csv)
     if args.plot:
         _check_output("--plot", args.plot, suffixes=True)
-    bar = ProgressBar(f"sweep {key}")
+    bar = ProgressBar(f"sweep {key if keys is None else ' x '.join(keys)}")
     rows, worst = [], EXIT_OK
-    for value, item in sweep(scene, key, values, jobs=args.jobs, dask=args.dask, progress=bar):
-        row = summary_row(value, item)
+    # Each value is reduced where it is solved (a worker sends back its row, not its Result).
+    reduce = functools.partial(_sweep_outcome, key, keys, args.json)
+    for _, (row, exit_code, record) in sweep(scene, key, values, jobs=args.jobs, dask=args.dask,
+                                             progress=bar, reduce=reduce):
         rows.append(row)
-        if isinstance(item, Exception):
-            worst = max(worst, EXIT_INPUT if isinstance(item, SceneError) else EXIT_SOLVER)
-        elif not item.success:
-            worst = max(worst, EXIT_SOLVER)
-        if args.json:
-            record = ({"value": value, "key": key, "status": "error", "error": str(item)}
-                      if isinstance(item, Exception)
-                      else {"value": value, "key": key, **item.to_dict()})
-            print(_dumps(record), flush=True)
+        worst = max(worst, exit_code)
+        if record is not None:
+            print(record, flush=True)
+    columns = ["value"] if keys is None else list(keys)
     if not args.json:
-        head = (f"{key:>22s} {'status':10s} {'min w [m]':>12s} {'at x':>7s} {'energy [J]':>12s} "
-                f"{'contact [m]':>11s} {'zones':>5s}")
-        print(head)
+        print(" ".join(f"{c:>22s}" for c in columns) + f" {'status':10s} {'min w [m]':>12s} "
+              f"{'at x':>7s} {'energy [J]':>12s} {'contact [m]':>11s} {'zones':>5s}")
         for r in rows:
+            at = " ".join(f"{r[c]:22.6g}" for c in columns)
             if r["status"] == "error":
-                print(f"{r['value']:22.6g} error      {r['error']}")
+                print(f"{at} error      {r['error']}")
             else:
-                print(f"{r['value']:22.6g} {r['status']:10s} {r['min_w']:12.6g} {r['min_x']:7.4g} "
+                print(f"{at} {r['status']:10s} {r['min_w']:12.6g} {r['min_x']:7.4g} "
                       f"{r['energy']:12.6g} {r['contact_length']:11.4g} {r['contact_zones']:5d}")
     if args.csv:
-        fields = ["value", "status", "method", "min_w", "min_x", "max_w", "max_x", "energy",
+        fields = [*columns, "status", "method", "min_w", "min_x", "max_w", "max_x", "energy",
                   "contact_length", "contact_zones", "penetration", "time_s", "error"]
         with open(args.csv, "w", newline="") as fh:
             writer = csvmod.DictWriter(fh, fieldnames=fields, extrasaction="ignore")
             writer.writeheader()
             writer.writerows(rows)
-    if args.plot:
-        from .plot import save_sweep_plot
+    if args.plot and keys is not None:
+        from .sweep_plot import save_sweep_map
+        save_sweep_map(rows, keys, args.plot, log=[spec.endswith(":log") for _, spec, _ in axes],
+                       scene=scene)
+    elif args.plot:
+        from .sweep_plot import save_sweep_plot
         reference = None
         if key == "foundation.stiffness":
             # The limit k_F -> infinity: the rigid obstacle at the same gap.
@@ -393,13 +423,14 @@ def _build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("sweep", help="solve the scene for each value of one key")
     p.add_argument("scene", metavar="SCENE")
-    p.add_argument("--vary", required=True, metavar="KEY=START:STOP:NUM[:log]",
+    p.add_argument("--vary", required=True, action="append", metavar="KEY=START:STOP:NUM[:log]",
                    help="the key and its values, e.g. foundation.stiffness=1e8:1e12:20:log "
-                   "(load.scale multiplies every vertical load)")
+                   "(load.scale multiplies every vertical load); give it again for a grid "
+                   "of every combination (a map)")
     _common(p)
     p.add_argument("--csv", metavar="FILE", help="write one row per value")
     p.add_argument("--plot", metavar="FILE", help="write max deflection, energy and contact "
-                   "length against the value")
+                   "length against the value (for two keys: maps over the grid)")
     p.add_argument("--jobs", type=int, default=1, metavar="N", help="worker processes")
     p.add_argument("--dask", metavar="ADDRESS", help="send the values to a Dask scheduler "
                    "(needs dask[distributed])")

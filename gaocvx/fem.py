@@ -22,6 +22,8 @@ True
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -152,6 +154,15 @@ def geometric_matrix(x) -> sp.csr_matrix:
     return _assemble(np.asarray(x, float), local)
 
 
+@functools.lru_cache(maxsize=None)
+def _unit_rule(n: int):
+    """The n-point Gauss-Legendre rule on [0, 1] (cached: a sweep builds many meshes)."""
+    t, wt = np.polynomial.legendre.leggauss(n)
+    t, wt = 0.5 * (t + 1.0), 0.5 * wt
+    t.flags.writeable = wt.flags.writeable = False
+    return t, wt
+
+
 def gauss_points(x, n: int):
     """Gauss-Legendre points and weights on every element.
 
@@ -161,9 +172,7 @@ def gauss_points(x, n: int):
     wq : ndarray, shape (ne * n,)
     elem : ndarray of int, the element of each point
     """
-    t, wt = np.polynomial.legendre.leggauss(n)
-    t = 0.5 * (t + 1.0)
-    wt = 0.5 * wt
+    t, wt = _unit_rule(n)
     x = np.asarray(x, float)
     h = np.diff(x)
     xq = (x[:-1, None] + h[:, None] * t[None, :]).ravel()

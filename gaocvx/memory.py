@@ -75,6 +75,10 @@ def _read_int(path: str) -> int | None:
     return int(text) if text.isdigit() else None
 
 
+# Estimates below this are not checked against the available memory (see check_memory).
+SMALL = 64e6
+
+
 def available_memory() -> float | None:
     """Memory [bytes] a solve may use now, or None when it cannot be told.
 
@@ -129,9 +133,17 @@ def max_elements_that_fit(method: str = "auto", contact: str | None = None,
 
 
 def check_memory(elements: int, method: str, contact: str | None, key: str, got) -> None:
-    """Raise SceneError(key, ...) when the estimate exceeds the available memory."""
-    avail = available_memory()
+    """Raise SceneError(key, ...) when the estimate exceeds the available memory.
+
+    A solve whose estimate is under :data:`SMALL` is not checked: the
+    interpreter with numpy, scipy and cvxpy loaded already holds more, and
+    reading the kernel's counters would cost a sweep of small scenes a quarter
+    of a millisecond per value.
+    """
     need = estimate_memory(elements, method, contact)
+    if need < SMALL:
+        return
+    avail = available_memory()
     if avail is not None and need > avail:
         from .errors import SceneError
         raise SceneError(key, f"{elements} elements need about {need / 1e9:.3g} GB of memory "

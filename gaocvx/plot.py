@@ -1,10 +1,10 @@
-"""Pictures of results, comparisons and sweeps (matplotlib, imported only here).
+"""Pictures of results and comparisons (matplotlib, imported only here).
 
 :func:`plot` draws the deflection of one result on an Axes and returns it;
 :func:`plot_loads` draws what acts on the beam (the distributed load's
 profile, point forces, the axial force, the support reactions).  Nothing here
-calls ``show()``.  :func:`save_plot`, :func:`save_compare_plot` and
-:func:`save_sweep_plot` write files (PNG or SVG by suffix) for the command line.
+calls ``show()``.  :func:`save_plot` and :func:`save_compare_plot` write files (PNG or SVG by
+suffix) for the command line; sweeps are drawn by :mod:`gaocvx.sweep_plot`.
 
 Examples
 --------
@@ -29,8 +29,8 @@ import numpy as np
 
 from .errors import SceneError
 
-__all__ = ["plot", "plot_loads", "result_figure", "compare_figure", "sweep_figure", "save_plot",
-           "save_compare_plot", "save_sweep_plot", "PANELS", "UNITS"]
+__all__ = ["plot", "plot_loads", "result_figure", "compare_figure", "save_plot",
+           "save_compare_plot", "PANELS", "UNITS"]
 
 PANELS = ("slope", "moment", "shear", "reaction")
 _SUFFIXES = (".png", ".svg")
@@ -394,80 +394,5 @@ def compare_figure(results: dict):
     named = f", method {', '.join(sorted(methods))}" if methods else ""
     ax.set_title(f"Euler-Bernoulli and Gao, supports {result.scene.beam.supports}{named}",
                  fontsize=10)
-    fig.tight_layout()
-    return fig
-
-
-def save_sweep_plot(rows: list, key: str, path, reference: dict | None = None,
-                    log: bool = False, scene=None) -> Path:
-    """Write :func:`sweep_figure` to ``path`` (.png or .svg)."""
-    path = _check_file(path)
-    return _write(_pyplot(), sweep_figure(rows, key, reference, log, scene), path)
-
-
-def sweep_figure(rows: list, key: str, reference: dict | None = None, log: bool = False,
-                 scene=None):
-    """How max deflection, energy and contact length move with the swept value (a Figure).
-
-    Parameters
-    ----------
-    rows : list of dict
-        :func:`gaocvx.sweep.summary_row` of each value.
-    key : str
-        The swept key; its unit (UNITS) labels the x-axis.
-    reference : dict, optional
-        Numbers drawn as horizontal lines (e.g. the rigid obstacle's for a
-        foundation-stiffness sweep).
-    log : bool
-        Logarithmic x-axis.
-    scene : Scene, optional
-        The swept scene: without a foundation or obstacle there is no contact
-        panel, and an axial sweep marks the convexity limit P_bar_h.
-    """
-    plt = _pyplot()
-    ok = [r for r in rows if r["status"] != "error"]
-    x = np.array([r["value"] for r in ok])
-    contact = (scene.contact is not None) if scene is not None else any("penetration" in r for r in ok)
-    series = [("max |w| [m]", [max(abs(r["min_w"]), abs(r["max_w"])) for r in ok], "max_abs_w"),
-              ("energy [J]", [r["energy"] for r in ok], "energy")]
-    if contact:
-        series.append(("contact length [m]", [r["contact_length"] for r in ok], "contact_length"))
-    fig, axes = plt.subplots(len(series), 1, figsize=(7, 2.7 * len(series) + 0.6), sharex=True,
-                             squeeze=False)
-    axes = axes[:, 0]
-    limits = {}   # the convexity limits an axial sweep runs into
-    if scene is not None and key == "load.axial":
-        from .discrete import DiscreteProblem
-        dp = DiscreteProblem(scene, check_convexity=False)
-        limits["P_bar_h"] = dp.P_bar_h
-        if getattr(dp, "P_hat_h", None) is not None:   # a bonded foundation's limit
-            limits["P_hat_h"] = dp.P_hat_h
-    for ax, (label, y, ref_key) in zip(axes, series):
-        ax.plot(x, y, "o-", ms=3)
-        if ref_key == "contact_length":
-            # A point contact has length 0 but is contact: mark it.
-            pts = [(r["value"], r["contact_length"]) for r in ok
-                   if r.get("contact_zones", 0) and r["contact_length"] == 0]
-            if pts:
-                px, py = zip(*pts)
-                ax.plot(px, py, "v", color="tab:red", ms=6, label="point contact (length 0)")
-        if reference and ref_key in reference:
-            point = (ref_key == "contact_length" and reference[ref_key] == 0
-                     and reference.get("contact_zones", 0) > 0)
-            ax.axhline(reference[ref_key], color="saddlebrown", ls="--",
-                       label=reference.get("label", "reference")
-                       + (": point contact (length 0)" if point else ""))
-        for (name, value), style in zip(limits.items(), (":", "-.")):
-            ax.axvline(value, color="tab:red", ls=style, lw=1.2,
-                       label=f"{name} = {value:.4g} N" if ax is axes[0] else None)
-        if ax.get_legend_handles_labels()[0]:
-            ax.legend(fontsize=8)
-        ax.set_ylabel(label)
-        ax.grid(alpha=0.3)
-        if log:
-            ax.set_xscale("log")
-    unit = UNITS.get(key, "-")
-    axes[-1].set_xlabel(f"{key} [{unit}]")
-    fig.suptitle(f"sweep of {key}", fontsize=10)
     fig.tight_layout()
     return fig

@@ -6,7 +6,9 @@ scene, reusing what can be reused: the deflection scale of the first scene is
 kept, so Newton starts each value from the previous answer and the convex
 program is compiled once with Parameters and only re-solved.  Values can be
 spread over worker processes (``jobs``) or over a Dask cluster (``dask``),
-each taking a contiguous block so that reuse still works inside it.
+each taking a contiguous block so that reuse still works inside it.  Several
+keys vary together over the points of a grid (:func:`grid`), e.g. a map of
+foundation stiffness against gap.
 
 Examples
 --------
@@ -18,6 +20,16 @@ Examples
 >>> depth = [-0.007 - r.min["w"] for v, r in sweep(scene, "foundation.stiffness", values)]
 >>> depth[0] > depth[1] > depth[2] > 0    # the stiffer foundation lets the beam sink less
 True
+
+A stiffness-gap map: each point sets both keys.
+
+>>> keys = ("foundation.stiffness", "foundation.gap")
+>>> points = grid(parse_range("5e8:5e12:3:log"), parse_range("0.005:0.007:2"))
+>>> points.shape
+(6, 2)
+>>> rows = [summary_row(v, r, keys) for v, r in sweep(scene, keys, points)]
+>>> rows[0]["foundation.stiffness"], rows[0]["foundation.gap"], rows[0]["status"]
+(500000000.0, 0.005, 'optimal')
 """
 
 from __future__ import annotations
@@ -36,11 +48,14 @@ from .errors import SceneError, SolverError
 from .scene import Scene
 from .solve import choose_method, solve
 
-__all__ = ["parse_range", "sweep", "scene_at", "summary_row", "LOAD_SCALE"]
+__all__ = ["parse_range", "grid", "sweep", "scene_at", "summary_row", "LOAD_SCALE"]
 
 log = logging.getLogger(__name__)
 
 LOAD_SCALE = "load.scale"
+# Values per block of a parallel sweep at least (each block starts cold; later
+# values in it start from their neighbour's answer).
+BLOCK = 25
 
 
 def parse_range(text: str, key: str = "--vary") -> np.ndarray:
@@ -101,8 +116,45 @@ def _decimal_grid(start: str, stop: str, num: int, log: bool) -> np.ndarray:
         return np.array([float(v) for v in values])
 
 
-def scene_at(scene: Scene, key: str, value: float) -> Scene:
-    """The scene with ``key`` set to ``value`` (``load.scale`` multiplies the loads)."""
+def grid(*axes) -> np.ndarray:
+    """The points of the grid of several axes, one row per point, the first axis outermost.
+
+    Parameters
+    ----------
+    *axes : sequence of float
+        The values of each key, e.g. from :func:`parse_range`.
+
+    Returns
+    -------
+    ndarray, shape (prod(len(axis)), len(axes))
+
+    Examples
+    --------
+    >>> grid([1.0, 2.0], [10.0, 20.0, 30.0]).tolist()
+    [[1.0, 10.0], [1.0, 20.0], [1.0, 30.0], [2.0, 10.0], [2.0, 20.0], [2.0, 30.0]]
+    """
+    if not axes:
+        raise ValueError("grid needs at least one axis")
+    mesh = np.meshgrid(*[np.asarray(a, float) for a in axes], indexing="ij")
+    return np.stack([m.ravel() for m in mesh], axis=1)
+
+
+def _keys(key) -> tuple[str, ...]:
+    """``key`` as a tuple of keys (one dotted key, or a sequence of them)."""
+    return (key,) if isinstance(key, str) else tuple(key)
+
+
+def scene_at(scene: Scene, key, value) -> Scene:
+    """The scene with ``key`` set to ``value`` (``load.scale`` multiplies the loads).
+
+    ``key`` may be a sequence of keys and ``value`` the sequence of their values.
+    """
+    if not isinstance(key, str):
+        if LOAD_SCALE not in key:   # one validation for all keys
+            return scene.with_overrides(dict(zip(key, value, strict=True)))
+        for k, v in zip(key, value, strict=True):   # the scale applies to the loads set so far
+            scene = scene_at(scene, k, v)
+        return scene
     if key == LOAD_SCALE:
         load = scene.load
         q = load.q
@@ -115,6 +167,21 @@ def scene_at(scene: Scene, key: str, value: float) -> Scene:
             overrides["load.q"] = q
         return scene.with_overrides(overrides)
     return scene.with_overrides({key: value})
+
+
+def _check_keys(scene: Scene, keys: tuple[str, ...], values: np.ndarray) -> None:
+    """Fail fast on keys no value could make valid, or values that do not fit them."""
+    if not keys:
+        raise SceneError("--vary", "needs at least one key", keys)
+    for key in keys:
+        if not isinstance(key, str):
+            raise SceneError("--vary", "a key must be a string like foundation.stiffness", key)
+        _check_key(scene, key)
+        if keys.count(key) > 1:
+            raise SceneError(key, "is varied twice", key)
+    if values.ndim != 2 or values.shape[1] != len(keys):
+        raise SceneError("--vary", f"needs one value per key for each point ({len(keys)} "
+                         f"keys, values of shape {values.shape})", list(keys))
 
 
 def _check_key(scene: Scene, key: str) -> None:
@@ -140,22 +207,28 @@ def _solve_values(scene: Scene, key: str, values, method: str | None):
     # it pays from the second value on; Clarabel's iterations remain.
     reuse = len(values) > 1
     for value in values:
+        value = float(value) if isinstance(key, str) else tuple(float(v) for v in value)
         try:
-            s = scene_at(scene, key, float(value))
+            s = scene_at(scene, key, value)
             chosen = choose_method(s, method)
             dp = DiscreteProblem(s, W=W)
             W = dp.W if W is None else W
             result = solve(s, chosen, problem=dp, warm=warm if chosen == "newton" else None,
                            reuse=reuse and chosen == "convex")
             warm = result.extra.get("warm")
-            yield float(value), result
+            yield value, result
         except (SceneError, SolverError) as exc:
-            yield float(value), exc
+            yield value, exc
 
 
-def _solve_block(scene: Scene, key: str, values, method: str | None) -> list:
+def _solve_block(scene: Scene, key, values, method: str | None, reduce=None) -> list:
     """A contiguous block of values, for a worker process or a Dask task."""
-    return list(_solve_values(scene, key, values, method))
+    return [_reduced(reduce, item) for item in _solve_values(scene, key, values, method)]
+
+
+def _reduced(reduce, item):
+    value, outcome = item
+    return item if reduce is None else (value, reduce(value, outcome))
 
 
 def _blocks(values, n):
@@ -164,16 +237,20 @@ def _blocks(values, n):
     return [values[a:b] for a, b in zip(edges[:-1], edges[1:]) if b > a]
 
 
-def sweep(scene: Scene, key: str, values, method: str | None = None, jobs: int = 1,
-          dask: str | None = None, progress=None) -> Iterator[tuple[float, object]]:
+def sweep(scene: Scene, key, values, method: str | None = None, jobs: int = 1,
+          dask: str | None = None, progress=None,
+          reduce=None) -> Iterator[tuple[object, object]]:
     """Solve ``scene`` for each value of ``key``; yield ``(value, Result or error)`` in order.
 
     Parameters
     ----------
     scene : Scene
-    key : str
-        Dotted scene key, e.g. ``"foundation.stiffness"``, or ``"load.scale"``.
-    values : sequence of float
+    key : str or sequence of str
+        Dotted scene key, e.g. ``"foundation.stiffness"``, or ``"load.scale"``;
+        or several keys varied together.
+    values : sequence of float, or array of shape (n, len(key))
+        The values of one key; for several keys one row per point (e.g.
+        :func:`grid`), and each yielded value is the tuple of the row.
     method : str, optional
         As in :func:`gaocvx.solve`.
     jobs : int
@@ -183,41 +260,58 @@ def sweep(scene: Scene, key: str, values, method: str | None = None, jobs: int =
         to instead (needs the optional ``dask[distributed]``).
     progress : callable, optional
         Called as ``progress(done, total)`` after each value.
+    reduce : callable, optional
+        ``reduce(value, result_or_error)`` is yielded in place of the result,
+        computed where the value is solved (in the worker process or Dask
+        task): a large sweep over processes should send back only what it
+        keeps (e.g. ``functools.partial(summary_row, keys=...)``) — a
+        :class:`Result` with its discrete problem pickles to about 30 kB at
+        256 elements.  It must be picklable (a module-level function).
 
     A value whose scene is invalid yields its :class:`SceneError` (or a
     :class:`SolverError`) in place of a result; the sweep goes on.
     """
     values = np.asarray(values, float)
-    _check_key(scene, key)
+    if isinstance(key, str):
+        _check_key(scene, key)
+        if values.ndim != 1:
+            raise SceneError(key, "needs a sequence of numbers", values.tolist())
+    else:
+        key = _keys(key)
+        _check_keys(scene, key, values)
     total = len(values)
     if dask is None and jobs <= 1:
-        stream = _solve_values(scene, key, values, method)
+        stream = (_reduced(reduce, item) for item in _solve_values(scene, key, values, method))
     else:
-        blocks = _blocks(values, jobs if dask is None else max(jobs, 1) * 4)
-        mapped = (_dask_map(dask, scene, key, blocks, method) if dask is not None
-                  else _process_map(jobs, scene, key, blocks, method))
+        # Several blocks per worker so that progress and the load balance are
+        # seen as blocks finish; each keeps BLOCK values for its warm starts.
+        blocks = _blocks(values, max(jobs, 1) * max(1, min(16, len(values) // (BLOCK * jobs))))
+        mapped = (_dask_map(dask, scene, key, blocks, method, reduce) if dask is not None
+                  else _process_map(jobs, scene, key, blocks, method, reduce))
         stream = (item for block in mapped for item in block)
     t0 = time.perf_counter()
     for done, item in enumerate(stream, start=1):
         value, outcome = item
         what = (f"error: {outcome}" if isinstance(outcome, Exception)
-                else f"{outcome.status} ({outcome.method}, {outcome.time_s * 1e3:.1f} ms)")
-        log.info("sweep %s = %.6g: %s [%d/%d, %.1f s]", key, value, what, done, total,
+                else f"{outcome.status} ({outcome.method}, {outcome.time_s * 1e3:.1f} ms)"
+                if reduce is None else "done")
+        log.info("sweep %s = %s: %s [%d/%d, %.1f s]", key, _show(value), what, done, total,
                  time.perf_counter() - t0)
         if progress:
             progress(done, total)
         yield item
 
 
-def _process_map(jobs, scene, key, blocks, method):
+def _process_map(jobs, scene, key, blocks, method, reduce):
     from concurrent.futures import ProcessPoolExecutor
     with ProcessPoolExecutor(max_workers=jobs) as pool:
-        futures = [pool.submit(_solve_block, scene, key, block, method) for block in blocks]
+        futures = [pool.submit(_solve_block, scene, key, block, method, reduce)
+                   for block in blocks]
         for f in futures:  # in order
             yield f.result()
 
 
-def _dask_map(address, scene, key, blocks, method):
+def _dask_map(address, scene, key, blocks, method, reduce):
     try:
         from dask.distributed import Client
     except ImportError:
@@ -228,21 +322,31 @@ def _dask_map(address, scene, key, blocks, method):
     except OSError as exc:
         raise SceneError("--dask", f"cannot reach the Dask scheduler: {exc}", address) from None
     try:
-        futures = client.map(_solve_block, [scene] * len(blocks), [key] * len(blocks), blocks,
-                             [method] * len(blocks), pure=False)
+        n = len(blocks)
+        futures = client.map(_solve_block, [scene] * n, [key] * n, blocks, [method] * n,
+                             [reduce] * n, pure=False)
         for f in futures:
             yield f.result()
     finally:
         client.close()
 
 
-def summary_row(value: float, item) -> dict:
-    """The numbers a sweep reports for one value (or its error)."""
+def _show(value) -> str:
+    return f"{value:.6g}" if isinstance(value, float) else ", ".join(f"{v:.6g}" for v in value)
+
+
+def summary_row(value, item, keys=None) -> dict:
+    """The numbers a sweep reports for one value (or its error).
+
+    With ``keys`` (several keys varied together) the row has one column per key
+    in place of ``"value"``.
+    """
+    head = {"value": value} if keys is None else dict(zip(_keys(keys), value, strict=True))
     if isinstance(item, Exception):
-        return {"value": value, "status": "error", "error": str(item)}
+        return {**head, "status": "error", "error": str(item)}
     r = item
     zones = r.zones or []
-    row = {"value": value, "status": r.status, "method": r.method,
+    row = {**head, "status": r.status, "method": r.method,
            "min_w": r.min["w"], "min_x": r.min["x"], "max_w": r.max["w"], "max_x": r.max["x"],
            "energy": r.energy, "contact_length": float(sum(b - a for a, b in zones)),
            "contact_zones": len(zones),   # a point contact [x, x] counts, though of length 0

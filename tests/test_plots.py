@@ -17,7 +17,8 @@ from matplotlib.patches import Rectangle  # noqa: E402
 
 from conftest import scene_dict  # noqa: E402
 from gaocvx import Scene, load_scene, solve  # noqa: E402
-from gaocvx.plot import PANELS, compare_figure, result_figure, sweep_figure  # noqa: E402
+from gaocvx.plot import PANELS, compare_figure, result_figure  # noqa: E402
+from gaocvx.sweep_plot import sweep_figure  # noqa: E402
 from gaocvx.sweep import parse_range, summary_row, sweep  # noqa: E402
 
 EXAMPLES = sorted((Path(__file__).parent.parent / "examples").glob("*.toml"))
