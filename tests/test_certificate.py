@@ -356,3 +356,24 @@ def test_point_force_a_nanometre_from_a_pinned_end():
         r = solve(scene, method)
         assert r.success, r.message
         assert abs(r.energy - energy) <= 1e-12 * abs(energy), method
+
+
+def test_convex_returns_the_rung_nearest_to_passing(monkeypatch):
+    """When no rung of the Clarabel ladder certifies, the answer is the best attempt, not the last."""
+    import gaocvx.convex as convex
+    seen = []
+    real = convex.certify
+
+    def recording(mf, z, lam=None):
+        out = real(mf, z, lam)
+        seen.append(convex._badness(out))
+        return out
+
+    # Two rungs with loose tolerances: the second (looser) is the worse.
+    loose = [dict(tol_gap_abs=t, tol_gap_rel=t, tol_feas=t) for t in (1e-4, 1e-1)]
+    monkeypatch.setitem(convex.CLARABEL_LADDER, "smooth", loose)
+    monkeypatch.setattr(convex, "certify", recording)
+    scene = Scene.from_dict(scene_dict(foundation=(0.007, 5e10), q=-5e8, elements=32))
+    r = solve(scene, "convex")
+    assert r.status == "inaccurate" and len(seen) == 2 and seen[1] > seen[0] > 1.0
+    assert convex._badness(r.residual) == pytest.approx(seen[0])
