@@ -49,6 +49,9 @@ QUADRATIC_RANGE = 1e-10
 # A step the line search cuts by less than this is full: along a quadratic the
 # minimum sits at t = 1 - O(eps * cond), which the search finds as 0.9999999999.
 FULL_STEP = 1.0 - 1e-6
+# The obstacle's method: "coarse start" (contact_newton.solve_obstacle) or "continuation"
+# (the former method, kept for comparison: benchmarks/obstacle.py).
+OBSTACLE_METHOD = "coarse start"
 MAX_OUTER = 40     # multiplier updates for the obstacle
 RHO_GROWTH = 10.0  # the penalty's growth per multiplier update
 # Each inner problem of the continuation is a step towards the next: it stops at
@@ -118,58 +121,14 @@ def solve_newton(dp: DiscreteProblem, warm: dict | None = None, tol: float = TOL
         z, nit, note = _newton(mf, z, tol, max_iter, {})
         return _finish(mf, z, None, nit, t0, note)
 
-    # Method of multipliers for A z >= g.
+    # Rigid obstacle: the method of multipliers (gaocvx.contact_newton).
     lam = mf.no_contact_forces()
     if warm is not None and warm.get("lam") is not None and len(warm["lam"]) == len(lam):
         lam = np.array(warm["lam"], float)
-    rho, rho_max = _penalty(mf)
-    total = 0
-    previous = math.inf
-    best, stalled = None, 0
-    for outer in range(1, MAX_OUTER + 1):
-        # Continuation: the penalty starts gentle (a soft foundation, which Newton
-        # solves from any start) and stiffens tenfold per update up to rho_max.
-        inner = tol if rho >= rho_max else max(tol, INNER_TOL)  # the last ones to round-off
-        z, nit, note = _newton(mf, z, inner, max_iter - total, {"shift": lam, "rho": rho})
-        total += nit
-        gap = mf.gap(z)
-        lam = np.maximum(lam - rho * gap, 0.0)
-        # Iterates that could pass are judged by the whole certificate: a stiff
-        # penalty ends the violation, but its round-off (rho eps) can spoil
-        # stationarity on flat contact, so the best iterate seen is the answer.
-        # The others skip the stationarity (one more factorisation).
-        H = mf.hessian(z)
-        residual = _obstacle_measures(mf, z, lam, gap, H)
-        last = (z, lam, f"{note}; {outer} multiplier updates")
-        merit = math.inf
-        if passes({"stationarity": 0.0, **residual}):
-            residual = {"stationarity": _stationarity(mf, z, lam, H), **residual}
-            merit = max(residual[k] / (MARGIN[k] * TOLERANCES[k]) for k in TOLERANCES)
-            if best is None or merit < best[0]:
-                # Progress is a halving of the merit: on a long flat contact the
-                # multipliers converge by a few per cent per update at the largest
-                # penalty (measured: 3.3e-10 -> 1.3e-10 of feasibility in 20).
-                stalled = 0 if best is None or merit < 0.5 * best[0] else stalled + 1
-                best = (merit, *last, residual)
-            else:
-                stalled += 1
-        log.info("newton: multiplier update %d (penalty %.1e): %d iterations, feasibility "
-                 "%.1e, stationarity %s", outer, rho, nit, residual["feasibility"],
-                 f"{residual['stationarity']:.1e}" if "stationarity" in residual else "-")
-        # Done when within the margins, or when a best within ten times them has
-        # not been halved for three updates (round-off, or a slow crawl: a stiffer
-        # penalty only hurts).
-        if merit <= 1.0 or total >= max_iter or (best is not None and stalled >= 3
-                                                  and best[0] <= 10.0):
-            break
-        violation = residual["feasibility"]
-        if rho < rho_max or violation > 0.25 * previous:
-            rho = min(RHO_GROWTH * rho, rho_max)
-        previous = violation
-    if best is None:  # no iterate could pass: the last one, with its full certificate
-        return _finish(mf, *last[:2], total, t0, last[2])
-    _, z, lam, note, residual = best
-    return _finish(mf, z, lam, total, t0, note, residual)
+    from .contact_newton import continuation, solve_obstacle  # it uses this module's steps
+    method = continuation if OBSTACLE_METHOD == "continuation" else solve_obstacle
+    z, lam, nit, note, residual = method(mf, z, lam, tol, max_iter)
+    return _finish(mf, z, lam, nit, t0, note, residual)
 
 
 def _rescaled_warm(warm: dict | None, dp: DiscreteProblem) -> dict | None:
@@ -268,12 +227,40 @@ def _newton(mf: MixedForm, z, tol, max_iter, al):
     return z, max_iter, f"stopped after {max_iter} iterations"
 
 
+def _newton_step(mf: MixedForm, z, al, rounds):
+    """One semismooth Newton step on the augmented energy ``al``.
+
+    Returns (new z, decrement at z, factorisations, settled); the decrement is
+    None when the line search stalled; settled: a full step that kept its
+    predicted active set (on a piecewise-quadratic energy, the minimiser).
+    """
+    g = mf.gradient(z, **al)
+    H = mf.hessian(z, **al)
+    d, mu = mf.kkt_solve(H, -g, -mf.link(z))
+    factorisations = 1
+    decrement = _decrement(d, H, mf.scale(z, H))
+    predicted, mu_p, used, n = _predict_active_set(mf, z, d, al, rounds, count=True)
+    factorisations += n
+    if mu_p is not None and float(g @ predicted) < 0.5 * float(g @ d):
+        d, mu = predicted, mu_p
+    if decrement == math.inf and float(g @ d) + float(mu @ (mf.C @ d)) > 0:
+        d = -d
+    shift = float(mu @ (mf.C @ d))
+    t = line_search(lambda s: float(mf.gradient(z + s * d, **al) @ d) + shift,
+                    float(g @ d) + shift)
+    if t is None:
+        return z, None, factorisations, False
+    z = z + t * d
+    settled = t >= FULL_STEP and _same(mf.active_sets(z, **al), used) and not mf.dp.needs_gao
+    return z, decrement, factorisations, settled
+
+
 def _same(a, b):
     return all((x is None and y is None) or (x is not None and np.array_equal(x, y))
                for x, y in zip(a, b))
 
 
-def _predict_active_set(mf, z, d, al, rounds=8):
+def _predict_active_set(mf, z, d, al, rounds=8, count=False):
     """Semismooth Newton step with the active set predicted at the step's end.
 
     The contact forces are linearised on the points in contact at z + d
@@ -284,6 +271,7 @@ def _predict_active_set(mf, z, d, al, rounds=8):
     """
     used = mf.active_sets(z, **al)
     mu = None
+    n = 0
     for _ in range(rounds):
         predicted = mf.active_sets(z + d, **al)
         if _same(predicted, used):
@@ -292,7 +280,8 @@ def _predict_active_set(mf, z, d, al, rounds=8):
         g = mf.gradient(z, active=used, **al)
         H = mf.hessian(z, active=used, **al)
         d, mu = mf.kkt_solve(H, -g, -mf.link(z))
-    return d, mu, used
+        n += 1
+    return (d, mu, used, n) if count else (d, mu, used)
 
 
 def line_search(dphi, slope0, rtol=0.1, max_eval=30):

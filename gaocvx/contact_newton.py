@@ -1,0 +1,253 @@
+"""Rigid obstacle: the method of multipliers, started from a coarse mesh's answer.
+
+The obstacle ``A z >= g`` (nodes and contact Gauss points, :mod:`gaocvx.mixed`)
+is imposed by the augmented Lagrangian
+
+    E(z) + 1/(2 rho) sum max(0, lam_i - rho gap_i(z))^2,
+
+whose inner problems are semismooth (a foundation with a shifted level) and are
+solved by :func:`gaocvx.newton._newton_step`.  It needs no linearly
+independent active constraints: a beam lying flat on the obstacle has seven
+active rows per element on a cubic, and a primal-dual active-set method,
+whose multipliers there are not unique, chatters (measured: 30 steps without
+settling at 2048 elements) or, from an over-predicted contact set, releases
+a few points per step.
+
+What costs iterations is finding the contact set.  The method used before
+found it by continuation, the penalty growing tenfold per update from the
+beam's own stiffness (13-22 Newton steps, 30-60 factorisations at 128-2048
+elements).  Here the contact set comes from the answer on a mesh 16 times
+coarser (recursively, down to 8-127 elements, where the continuation runs
+with thousandfold jumps): its deflection, evaluated on this mesh, is within
+the coarse discretisation error of the answer, so Newton at the largest
+penalty, started there with no multipliers (a stiff foundation), meets only
+local changes of the contact set, and one to three multiplier updates at
+that penalty end the violation.  A sweep's warm start (multipliers of the
+previous value) starts at the largest penalty directly.
+
+Every multiplier update at the largest penalty is judged by the certificate
+(:func:`gaocvx.newton.certify`'s measures); the first iterate within the
+stopping margins is the answer.  If none is within FAST_BUDGET
+factorisations, or progress stalls, the continuation runs from the original
+start (:func:`continuation`), as before; the message says so.
+
+Examples
+--------
+>>> from gaocvx import Scene, solve
+>>> scene = Scene.from_dict({"beam": {"model": "gao", "supports": "P1", "length": 1.0,
+...     "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1, "width": 1.0},
+...     "load": {"q": -5e8}, "obstacle": {"gap": 0.007}, "mesh": {"elements": 512}})
+>>> r = solve(scene, "newton")
+>>> r.status, "from the 32-element answer" in r.message, r.nit <= 8
+('optimal', True, True)
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+
+from . import fem
+from .discrete import DiscreteProblem
+from .mixed import MixedForm
+
+__all__ = ["solve_obstacle", "continuation", "coarse_elements"]
+
+log = logging.getLogger(__name__)
+
+# Continuation on the coarsest mesh: the penalty starts at about the beam's
+# global stiffness (a soft foundation, which Newton solves from any start) and
+# jumps thousandfold per update (tenfold took 8-14 updates).
+RHO_START = 10.0
+RHO_JUMP = 1e3
+# The multipliers are updated once the inner Newton step starts below this
+# decrement (its end is then ~its square), or settles a piecewise-quadratic energy.
+UPDATE_DECREMENT = 1e-4
+# Re-solves per step with the active set predicted at its end: on flat contact at
+# the largest penalty the predictions chatter (8 allowed: 4-9 factorisations a
+# step without settling; 2: 1.2x fewer factorisations over the scenes of
+# benchmarks/obstacle.py and 4 continuations instead of 7).
+ROUNDS = 2
+# A mesh of N >= COARSE_RATIO * COARSE_MIN elements starts from the answer on
+# N // COARSE_RATIO elements.
+COARSE_RATIO = 16
+COARSE_MIN = 8
+# Factorisations (on this mesh) before the continuation takes over, and the
+# updates at the largest penalty without halving the merit that count as a stall.
+FAST_BUDGET = 40
+STALL = 4
+# Stop when every measure of the certificate is within this fraction of its
+# tolerance.  Feasibility: a violation of w >= g up to 1e-9 of the answer (the
+# certificate allows 1e-7; the continuation asked 1e-10, for which a long flat
+# contact needs tens of updates: the multipliers of its redundant rows converge
+# by a few per cent per update).  Not 1e-8: on a flat contact at 1024 elements
+# a violation of 1.05e-9 left nodes 1.2e-7 of the answer from Clarabel's
+# (near the zone's end, where the violation moves the free boundary), 5.3e-10
+# left 3.2e-8.
+MARGIN = {"stationarity": 1e-3, "feasibility": 1e-2, "dual": 1e-3, "complementarity": 1e-2}
+
+
+def coarse_elements(N: int) -> int | None:
+    """Elements of the mesh whose answer starts an N-element solve (None: no coarser start).
+
+    >>> coarse_elements(2048), coarse_elements(128), coarse_elements(127)
+    (128, 8, None)
+    """
+    return N // COARSE_RATIO if N >= COARSE_RATIO * COARSE_MIN else None
+
+
+def solve_obstacle(mf: MixedForm, z, lam, tol: float, max_iter: int, start_only: bool = False):
+    """Minimise the energy of ``mf`` over ``A z >= g``; (z, lam, iterations, note, residual).
+
+    ``z``, ``lam``: the start (``lam`` non-zero: a warm start, at the largest
+    penalty).  ``iterations`` counts the KKT factorisations of the Newton
+    steps on this mesh (a step with a predicted active set may take several);
+    ``residual`` is the certificate of ``(z, lam)`` (z on the linking
+    constraints), or None when only the continuation's best iterate, not yet
+    certified, is returned.  ``start_only``: the answer only starts a finer
+    mesh's solve; it is returned within the stopping margins of feasibility,
+    dual sign and complementarity, without the stationarity's two
+    factorisations (residual None) and without the continuation.
+    """
+    from .newton import _penalty
+    _, rho_max = _penalty(mf)
+    start = (z, lam)
+    coarse, note = 0, ""
+    n_c = coarse_elements(mf.dp.n_nodes - 1)
+    if np.any(lam):
+        rho = rho_max
+    elif n_c is not None:
+        z, coarse = _coarse_start(mf, n_c, tol, max_iter)
+        note = f" from the {n_c}-element answer ({coarse} factorisations there)"
+        rho = rho_max
+    else:
+        rho = min(RHO_START, rho_max)
+    z, lam, nf, steps, residual = _iterate(mf, z, lam, rho, rho_max, min(FAST_BUDGET, max_iter),
+                                           start_only)
+    if residual is not None or start_only:
+        return z, lam, nf, f"{steps} Newton steps{note}", residual
+    log.info("obstacle: not certified after %d factorisations%s; the continuation", nf, note)
+    z, lam, n_old, note_old, residual = continuation(mf, *start, tol, max_iter)
+    return z, lam, nf + n_old, f"{note_old}; the continuation, after {nf} factorisations " \
+        f"without a certified answer{note}", residual
+
+
+def _coarse_start(mf: MixedForm, n_c: int, tol, max_iter):
+    """The answer on ``n_c`` elements as variables of ``mf``, and its factorisations."""
+    dp = mf.dp
+    # Same scene, scale and level; the convexity limit of a coarser mesh is higher.
+    coarse = DiscreteProblem(dp.scene, elements=n_c, check_convexity=False)
+    if coarse.W != dp.W:
+        coarse = coarse.rescaled(dp.W)
+    mf_c = MixedForm.on_obstacle(coarse)
+    z_c, _, nf, _, _ = solve_obstacle(mf_c, -mf_c.origin, mf_c.no_contact_forces(), tol,
+                                      max_iter, start_only=True)
+    # Its Hermite interpolant at this mesh's nodes (deflection and slope), chords from them.
+    u = coarse.full(mf_c.to_hermite(z_c))
+    full = np.zeros(mf.nz)
+    full[0::3] = fem.eval_matrix(coarse.xi, dp.xi, 0) @ u
+    full[1::3] = fem.eval_matrix(coarse.xi, dp.xi, 1) @ u
+    full[2::3][: dp.n_nodes - 1] = np.diff(full[0::3]) / np.diff(dp.xi)
+    return full[mf.free] - mf.origin, nf
+
+
+def _iterate(mf: MixedForm, z, lam, rho, rho_max, budget, start_only=False):
+    """Newton steps on the augmented Lagrangian, multipliers updated as each inner problem ends.
+
+    Returns (z, lam, factorisations, steps, residual or None).
+    """
+    from . import newton as nw
+    total, best, stalled = 0, math.inf, 0
+    steps = 0
+    while total < budget:
+        steps += 1
+        z, decrement, nf, settled = nw._newton_step(mf, z, {"shift": lam, "rho": rho}, ROUNDS)
+        total += nf
+        log.debug("obstacle step %d: penalty %.0e, decrement %s, %d factorisations", steps, rho,
+                  decrement, nf)
+        if decrement is None:  # the line search stalled: round-off
+            break
+        if decrement > UPDATE_DECREMENT and not settled:
+            continue
+        gap = mf.gap(z)
+        lam = np.maximum(lam - rho * gap, 0.0)
+        if rho < rho_max:
+            rho = min(RHO_JUMP * rho, rho_max)
+            continue
+        z = mf.on_manifold(z)  # the certified function is the one reported
+        gap = mf.gap(z)
+        H = mf.hessian(z)
+        residual = nw._obstacle_measures(mf, z, lam, gap, H)
+        merit = max(residual[k] / (MARGIN[k] * nw.TOLERANCES[k]) for k in residual)
+        log.debug("obstacle: multiplier update at step %d, merit %.1e (%s)", steps, merit,
+                  residual)
+        if merit <= 1.0 and start_only:
+            return z, lam, total, steps, None
+        if merit <= 1.0:  # the stationarity too (two more factorisations)
+            residual = {"stationarity": nw._stationarity(mf, z, lam, H), **residual}
+            if residual["stationarity"] <= MARGIN["stationarity"] * nw.STATIONARITY_TOL:
+                return z, lam, total, steps, residual
+        stalled = 0 if merit < 0.5 * best else stalled + 1
+        best = min(best, merit)
+        if stalled >= STALL:
+            break
+    return z, lam, total, steps, None
+
+
+def continuation(mf: MixedForm, z, lam, tol, max_iter):
+    """The method of multipliers with the penalty growing tenfold per update (the former method).
+
+    Returns (z, lam, iterations, note, residual or None); the iterate is the
+    best seen by the certificate.
+    """
+    from . import newton as nw
+    rho, rho_max = nw._penalty(mf)
+    total = 0
+    previous = math.inf
+    best, stalled = None, 0
+    for outer in range(1, nw.MAX_OUTER + 1):
+        # The penalty starts gentle (a soft foundation, which Newton solves from
+        # any start) and stiffens tenfold per update up to rho_max.
+        inner = tol if rho >= rho_max else max(tol, nw.INNER_TOL)  # the last ones to round-off
+        z, nit, note = nw._newton(mf, z, inner, max_iter - total, {"shift": lam, "rho": rho})
+        total += nit
+        gap = mf.gap(z)
+        lam = np.maximum(lam - rho * gap, 0.0)
+        # Iterates that could pass are judged by the whole certificate: a stiff
+        # penalty ends the violation, but its round-off (rho eps) can spoil
+        # stationarity on flat contact, so the best iterate seen is the answer.
+        # The others skip the stationarity (one more factorisation).
+        H = mf.hessian(z)
+        residual = nw._obstacle_measures(mf, z, lam, gap, H)
+        last = (z, lam, f"{note}; {outer} multiplier updates")
+        merit = math.inf
+        if nw.passes({"stationarity": 0.0, **residual}):
+            residual = {"stationarity": nw._stationarity(mf, z, lam, H), **residual}
+            merit = max(residual[k] / (nw.MARGIN[k] * nw.TOLERANCES[k]) for k in nw.TOLERANCES)
+            if best is None or merit < best[0]:
+                # Progress is a halving of the merit: on a long flat contact the
+                # multipliers converge by a few per cent per update at the largest
+                # penalty (measured: 3.3e-10 -> 1.3e-10 of feasibility in 20).
+                stalled = 0 if best is None or merit < 0.5 * best[0] else stalled + 1
+                best = (merit, *last, residual)
+            else:
+                stalled += 1
+        log.info("newton: multiplier update %d (penalty %.1e): %d iterations, feasibility "
+                 "%.1e, stationarity %s", outer, rho, nit, residual["feasibility"],
+                 f"{residual['stationarity']:.1e}" if "stationarity" in residual else "-")
+        # Done when within the margins, or when a best within ten times them has
+        # not been halved for three updates (round-off, or a slow crawl: a stiffer
+        # penalty only hurts).
+        if merit <= 1.0 or total >= max_iter or (best is not None and stalled >= 3
+                                                  and best[0] <= 10.0):
+            break
+        violation = residual["feasibility"]
+        if rho < rho_max or violation > 0.25 * previous:
+            rho = min(nw.RHO_GROWTH * rho, rho_max)
+        previous = violation
+    if best is None:  # no iterate could pass: the last one, certified by the caller
+        return last[0], last[1], total, last[2], None
+    _, z, lam, note, residual = best
+    return z, lam, total, note, residual
