@@ -1,0 +1,97 @@
+"""A seeded random campaign above P_bar_h in the test suite (issue 10).
+
+Scenes from tests/nonconvex_campaign_support.py's generator, solved by
+``solve(scene, "global")`` and checked against the independent energy of
+tests/nonconvex_independent.py by the rules of that module: a multi-start
+local search (± each buckling mode, mixtures, the answer and its mirror image;
+trust-region Newton, SLSQP with an obstacle) finds nothing below the certified
+lower bound; an optimal minimiser is a KKT point and, without an obstacle, a
+local minimum of the independent energy; reported mirror minimisers agree in
+energy; refusals are justified; nothing crashes.  The larger campaign is
+benchmarks/nonconvex_campaign.py (docs/nonconvex-campaign.md).
+
+The seeded set was picked to cover every support, every contact model, load
+tables, point forces, profiles, k = 1 and 2, a refusal, and forces from just
+above the limit to several times it, at under 20 s in all.
+"""
+
+import json
+
+import numpy as np
+import pytest
+
+from nonconvex_campaign_support import random_scene, run_case
+
+from gaocvx import Scene, solve
+
+# (seed, index) of the generator, each on 8 or 12 elements as it draws them.
+SEEDED = [(7, 0), (7, 1), (7, 2), (7, 4), (7, 6), (7, 8), (7, 9), (7, 10),
+          (8, 2), (8, 3), (8, 5), (8, 7), (8, 8), (8, 23), (9, 13)]
+
+
+def _case(seed, index):
+    rng = np.random.default_rng([seed, index])
+    case = random_scene(rng, elements=int(rng.choice([8, 12])))
+    case.id = f"{seed}:{index}"
+    return case
+
+
+@pytest.mark.parametrize("seed, index", SEEDED, ids=[f"{s}:{i}" for s, i in SEEDED])
+def test_seeded_scene_above_the_limit(seed, index):
+    case = _case(seed, index)
+    rec = run_case(case, starts=12, seed=index)
+    assert not rec["violations"], (rec["violations"], json.dumps(case.data))
+    # a Gao scene with at most 3 unstable modes is answered, and certified
+    if case.data["beam"]["model"] == "gao" and rec["k"] <= 3:
+        assert rec["status"] == "optimal", (rec.get("message"), json.dumps(case.data))
+
+
+def test_seeded_set_covers_the_scene_space():
+    tags = set()
+    for seed, index in SEEDED:
+        tags |= set(_case(seed, index).tags)
+    assert tags >= {"P1", "P2", "P3", "P4", "none", "foundation", "bonded", "obstacle", "channel",
+                    "table", "points", "profile", "near-limit", "far-above", "euler-bernoulli"}
+
+
+def test_default_mesh():
+    """32 elements (the default mesh): P2 with one unstable mode, P1 with two."""
+    for index in (2, 4):
+        rng = np.random.default_rng([7, index])
+        case = random_scene(rng, elements=32)
+        rec = run_case(case, starts=12, seed=index)
+        assert not rec["violations"], (rec["violations"], json.dumps(case.data))
+        assert rec["status"] == "optimal", rec.get("message")
+
+
+# ---------------------------------------------------------------- found by the campaign
+@pytest.mark.xfail(strict=True, reason="a channel the buckled beam does not touch: the node "
+                   "program's interior-point multipliers on the far rows leave a complementarity "
+                   "residual of 6.8e-12 > 1e-12, so a correct minimiser (independent KKT "
+                   "stationarity 2.9e-9, no row touching, Hessian positive definite) is reported "
+                   "'inaccurate: the minimiser's own certificate failed' (campaign scene 2:1)")
+def test_untouched_channel_is_certified():
+    data = {"beam": {"model": "gao", "supports": "P2", "length": 2.8216664003911887, "E": 2.1e11,
+                     "nu": 0.21420910778984964, "half_thickness": 0.06217198969486908,
+                     "width": 1.0},
+            "load": {"axial": 287711319.42105836}, "mesh": {"elements": 8},
+            "obstacle": {"gap": 0.020691100899755382, "gap_above": 0.16335120955167207}}
+    r = solve(Scene.from_dict(data), "global")
+    assert r.status == "optimal", r.message
+
+
+@pytest.mark.xfail(strict=True, reason="a cantilever pressed flat onto an obstacle at gap 0 "
+                   "above P_bar_h: the minimiser is w = 0 (energy 0, energy scale 0), so the gap "
+                   "can never be within 1e-8 of the scale; branch and bound runs to its 4000-node "
+                   "limit (44 s at 8 elements, the 120 s time limit at 24 elements) and reports "
+                   "'inaccurate' with a negative gap (campaign scene 1:11)")
+def test_beam_pressed_flat_onto_an_obstacle_above_the_limit(monkeypatch):
+    import gaocvx.nonconvex.bnb as bnb
+    # the time limit cut to 5 s to keep the suite fast; 44 s do not certify it either
+    monkeypatch.setattr(bnb, "TIME_LIMIT", 5.0)
+    data = {"beam": {"model": "gao", "supports": "P3", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                     "half_thickness": 0.1, "width": 1.0},
+            "load": {"q": -1e8, "axial": 438001097.6873237}, "mesh": {"elements": 8},
+            "obstacle": {"gap": 0.0}}
+    r = solve(Scene.from_dict(data), "global")
+    assert r.status == "optimal", r.message
