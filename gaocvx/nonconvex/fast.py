@@ -10,11 +10,12 @@ of :class:`gaocvx.mixed.MixedForm` (LU, so the Hessian need not be definite
 off the slice) bordered by the k rows of ``B`` (a Schur complement of size k).
 The envelope theorem gives ``dF/ds = -nu``, the multipliers of ``B z = s``.
 
-A node problem is then the minimum over a box of the convex function
-``G(s) = F(s) + sum c_i s_i^2 + chord(s)``; for one mode it is found by Brent's
-method on the monotone ``G'``, and ``G(s0) + min_box G'(s0)(s - s0)`` is a
-lower bound by convexity.  Obstacles are not handled here (the dense programs
-of :mod:`.node` are).
+Differentiating the slice's optimality conditions gives its Hessian too,
+``F'' = S^-1``.  A node problem is then the minimum over a box of the convex
+function ``G(s) = F(s) + sum c_i s_i^2 + chord(s)`` (k <= 3 variables), found
+by projected Newton with that Hessian, and ``G(s0) + min_box G'(s0)(s - s0)``
+is a lower bound by convexity at whatever point ``s0`` it stops.  Obstacles
+are handled by :mod:`.fastobstacle`.
 
 Examples
 --------
@@ -35,17 +36,22 @@ Examples
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
-import scipy.optimize as so
 import scipy.sparse as sp
 
 from ..mixed import MixedForm
 from .minimum import to_mixed
 from .node import NodeSolution
 
-__all__ = ["FastProgram"]
+__all__ = ["FastProgram", "box_qp"]
+
+# Projected Newton steps per node at most, and the relative gap between a node's
+# value and its convexity bound at which they stop.
+MAX_OUTER = 30
+BOUND_TOL = 1e-14
 
 
 class FastProgram:
@@ -73,15 +79,18 @@ class FastProgram:
         self.B = np.asarray((self.T.T @ np.asarray(dp.G @ modes.phi)).T)
         self.solves = 0
         self._z = np.zeros(mf.n)
+        self._s = None  # the last node's minimiser: the next node's start
 
     def energy(self, u) -> float:
         """The energy of free Hermite DOFs ``u`` in the mixed form (non-dimensional)."""
         return sum(self.mf.energy_parts(to_mixed(self.mf, u)).values())
 
     def _slice(self, s, z, max_iter=60):
+        """Damped Newton on the slice ``B z = s``; returns ``z``, ``nu``, ``S`` and convergence."""
         mf, B = self.mf, self.B
         ok = False
         nu = np.zeros(self.k)
+        S = np.eye(self.k)
         previous = math.inf
         for it in range(max_iter):
             g = mf.gradient(z)
@@ -116,45 +125,116 @@ class FastProgram:
                 ok = True
                 break
             previous = abs(dec)
-        return z, nu, ok
+        return z, nu, S, ok
 
     def reduced(self, s0):
         """``F(s0)``, its gradient ``-nu``, the free Hermite DOFs and convergence."""
+        F, dF, _, u, ok = self.reduced_hessian(s0)
+        return F, dF, u, ok
+
+    def reduced_hessian(self, s0):
+        """``F(s0)``, its gradient ``-nu``, its Hessian ``S^-1``, the free Hermite DOFs, convergence.
+
+        The multipliers' sensitivity on the slice: ``dz = -X dnu``,
+        ``B dz = ds``, so ``dnu/ds = -S^-1`` and ``F'' = S^-1`` (S, the bordered
+        system's Schur complement, from the last Newton step).
+        """
         s0 = np.asarray(s0, float)
         self.solves += 1
-        z, nu, ok = self._slice(s0, self._z.copy())
+        z, nu, S, ok = self._slice(s0, self._z.copy())
         if not np.all(np.isfinite(z)):
-            z, nu, ok = self._slice(s0, np.zeros(self.mf.n))
+            z, nu, S, ok = self._slice(s0, np.zeros(self.mf.n))
         self._z = z
         F = sum(self.mf.energy_parts(z).values())
-        return float(F), -nu, self.mf.to_hermite(z), ok
+        try:
+            hess = np.linalg.inv(S)
+        except np.linalg.LinAlgError:
+            hess = np.full((self.k, self.k), np.nan)
+        return float(F), -nu, 0.5 * (hess + hess.T), self.mf.to_hermite(z), ok
 
     def obstacle_multipliers(self):
         return None
 
     def solve_box(self, lo, hi) -> NodeSolution:
-        """Minimise ``G(s) = F(s) + c s^2 + chord`` on ``[lo, hi]`` (one mode); bound by convexity."""
-        if self.k != 1:
-            raise ValueError("the fast path handles one unstable mode")
-        c = float(self.modes.c[0])
-        a, b = float(lo[0]), float(hi[0])
-        slope, offset = -c * (a + b), c * a * b
+        """Minimise ``G(s) = F(s) + sum c_i s_i^2 + chord`` on ``[lo, hi]``; bound by convexity.
+
+        Projected Newton with the exact Hessian ``S^-1 + 2 diag(c)``: each step
+        minimises the quadratic model over the box exactly (:func:`box_qp`), and
+        a backtracking line search on G keeps the values falling.  Whatever the
+        last point ``s0``, ``G(s0) + min_box G'(s0)(s - s0)`` is a lower bound
+        (G is convex); the iteration stops when it lies within
+        :data:`BOUND_TOL` of ``G(s0)``.
+        """
+        lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+        c = np.asarray(self.modes.c, float)
+        slope, offset = -c * (lo + hi), float(np.sum(c * lo * hi))
 
         def G(s):
-            F, dF, u, ok = self.reduced([s])
-            return F + c * s * s + slope * s + offset, float(dF[0]) + 2 * c * s + slope, u, ok
+            F, dF, hess, u, ok = self.reduced_hessian(s)
+            value = F + float(np.sum(c * s * s)) + float(slope @ s) + offset
+            return value, dF + 2 * c * s + slope, hess + 2 * np.diag(c), u, ok
 
-        ga, gb = G(a), G(b)
-        if ga[1] >= 0:
-            s0, best = a, ga
-        elif gb[1] <= 0:
-            s0, best = b, gb
-        else:
-            s0 = so.brentq(lambda s: G(s)[1], a, b, xtol=1e-14 * max(abs(a), abs(b), 1.0))
-            best = G(s0)
-        value, d, u, ok = best
-        # convexity: G(s) >= G(s0) + G'(s0)(s - s0) on the box
-        lower = value + min(d * (a - s0), d * (b - s0), 0.0)
+        def bound(s, value, grad):
+            return value + float(np.sum(np.minimum(grad * (lo - s), grad * (hi - s))))
+
+        s = np.clip(self._s if self._s is not None else 0.5 * (lo + hi), lo, hi)
+        value, grad, hess, u, ok = G(s)
+        lower = bound(s, value, grad)
+        for _ in range(MAX_OUTER):
+            if not (ok and np.all(np.isfinite(hess))):
+                break
+            if value - lower <= BOUND_TOL * max(abs(value), 1.0):
+                break
+            d = box_qp(hess, grad, lo - s, hi - s)
+            t, slope_d = 1.0, float(grad @ d)
+            while True:
+                trial = np.clip(s + t * d, lo, hi)
+                tv, tg, th, tu, tok = G(trial)
+                if tv <= value + 1e-4 * t * slope_d or t < 1e-8:
+                    break
+                t *= 0.5
+            if not tok or not tv <= value:
+                break
+            moved = np.max(np.abs(trial - s)) > 1e-13 * max(float(np.max(hi - lo)), 1e-300)
+            s, value, grad, hess, u, ok = trial, tv, tg, th, tu, tok
+            if not moved:   # at round-off: the gradient's noise is the bound's floor
+                lower = max(lower, bound(s, value, grad))
+                break
+            lower = max(lower, bound(s, value, grad))
+        self._s = s
+        # the slice solves' own accuracy (Newton to round-off, ~1e-16 of the energy)
         lower -= 1e-13 * max(abs(value), 1.0)
-        return NodeSolution(lower, value, np.array([s0]), u, None, ok, "optimal" if ok
-                            else "inaccurate")
+        return NodeSolution(lower, value, s, u, None, ok, "optimal" if ok else "inaccurate")
+
+
+def box_qp(H, g, a, b) -> np.ndarray:
+    """The minimiser of ``g'd + d'H d / 2`` over the box ``a <= d <= b`` (H positive definite, k <= 3).
+
+    Every face of the box (each coordinate free, at its lower or at its upper
+    end: 3^k faces) is tried: the minimiser is the unconstrained minimiser of
+    the face that contains it in its relative interior, so the best feasible
+    face solution is exact.
+
+    Examples
+    --------
+    >>> box_qp(np.eye(2), np.array([-2.0, 1.0]), np.array([-1.0, -1.0]), np.array([1.0, 1.0]))
+    array([ 1., -1.])
+    """
+    k = len(g)
+    best, best_val = np.clip(np.zeros(k), a, b), math.inf
+    for face in itertools.product((0, 1, 2), repeat=k):
+        d = np.where(np.array(face) == 1, a, np.where(np.array(face) == 2, b, 0.0))
+        free = np.array(face) == 0
+        if free.any():
+            rhs = -(g[free] + H[np.ix_(free, ~free)] @ d[~free])
+            try:
+                d[free] = np.linalg.solve(H[np.ix_(free, free)], rhs)
+            except np.linalg.LinAlgError:
+                continue
+        if np.any(d < a - 1e-15 * np.abs(a)) or np.any(d > b + 1e-15 * np.abs(b)):
+            continue
+        d = np.clip(d, a, b)
+        val = float(g @ d + 0.5 * d @ H @ d)
+        if val < best_val:
+            best, best_val = d, val
+    return best
