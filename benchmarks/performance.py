@@ -266,4 +266,6 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    from gaocvx.linalg import one_blas_thread
+    with one_blas_thread():   # as the command line runs (and the baseline solve too)
+        main()

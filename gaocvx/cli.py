@@ -510,7 +510,9 @@ def main(argv=None) -> int:
 
 
 def run() -> None:  # console-script entry point
-    code = main()
+    from .linalg import one_blas_thread
+    with one_blas_thread():
+        code = main()
     try:
         sys.stdout.flush()
     except BrokenPipeError:

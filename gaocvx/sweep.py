@@ -45,6 +45,7 @@ import numpy as np
 
 from .discrete import DiscreteProblem
 from .errors import SceneError, SolverError
+from .linalg import one_blas_thread
 from .scene import Scene
 from .solve import choose_method, solve
 
@@ -223,7 +224,14 @@ def _solve_values(scene: Scene, key: str, values, method: str | None):
 
 def _solve_block(scene: Scene, key, values, method: str | None, reduce=None) -> list:
     """A contiguous block of values, for a worker process or a Dask task."""
-    return [_reduced(reduce, item) for item in _solve_values(scene, key, values, method)]
+    with one_blas_thread():   # two workers on two cores: BLAS threads only contend
+        return [_reduced(reduce, item) for item in _solve_values(scene, key, values, method)]
+
+
+def _serial(scene: Scene, key, values, method: str | None, reduce):
+    with one_blas_thread():
+        for item in _solve_values(scene, key, values, method):
+            yield _reduced(reduce, item)
 
 
 def _reduced(reduce, item):
@@ -269,7 +277,8 @@ def sweep(scene: Scene, key, values, method: str | None = None, jobs: int = 1,
         256 elements.  It must be picklable (a module-level function).
 
     A value whose scene is invalid yields its :class:`SceneError` (or a
-    :class:`SolverError`) in place of a result; the sweep goes on.
+    :class:`SolverError`) in place of a result; the sweep goes on.  BLAS runs
+    on one thread while values are solved (:func:`gaocvx.linalg.one_blas_thread`).
     """
     values = np.asarray(values, float)
     if isinstance(key, str):
@@ -281,7 +290,7 @@ def sweep(scene: Scene, key, values, method: str | None = None, jobs: int = 1,
         _check_keys(scene, key, values)
     total = len(values)
     if dask is None and jobs <= 1:
-        stream = (_reduced(reduce, item) for item in _solve_values(scene, key, values, method))
+        stream = _serial(scene, key, values, method, reduce)
     else:
         # Several blocks per worker so that progress and the load balance are
         # seen as blocks finish; each keeps BLOCK values for its warm starts.

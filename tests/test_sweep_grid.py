@@ -134,3 +134,18 @@ def test_map_leaves_points_not_certified_blank_and_marks_them():
     marked = [line for line in ax.lines if line.get_label() == "not optimal"]
     assert marked and list(marked[0].get_xdata()) == [2.0] and list(marked[0].get_ydata()) == [4.0]
     matplotlib.pyplot.close(fig)
+
+
+def _blas_threads(value, item):
+    from threadpoolctl import threadpool_info
+    return {lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"}
+
+
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_values_are_solved_on_one_blas_thread(base, monkeypatch, jobs):
+    """BLAS threads only contend with the solvers' O(N) work: a sweep runs on one."""
+    for variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        monkeypatch.delenv(variable, raising=False)
+    seen = [t for _, t in sweep(base, "foundation.gap", [0.002, 0.004], jobs=jobs,
+                                reduce=_blas_threads)]
+    assert seen and all(t == {1} for t in seen), seen
