@@ -65,11 +65,6 @@ def test_default_mesh():
 
 
 # ---------------------------------------------------------------- found by the campaign
-@pytest.mark.xfail(strict=True, reason="a channel the buckled beam does not touch: the node "
-                   "program's interior-point multipliers on the far rows leave a complementarity "
-                   "residual of 6.8e-12 > 1e-12, so a correct minimiser (independent KKT "
-                   "stationarity 2.9e-9, no row touching, Hessian positive definite) is reported "
-                   "'inaccurate: the minimiser's own certificate failed' (campaign scene 2:1)")
 def test_untouched_channel_is_certified():
     data = {"beam": {"model": "gao", "supports": "P2", "length": 2.8216664003911887, "E": 2.1e11,
                      "nu": 0.21420910778984964, "half_thickness": 0.06217198969486908,

@@ -34,10 +34,11 @@ import math
 
 import numpy as np
 import scipy.linalg as la
+import scipy.optimize as so
 
-from ..discrete import complementarity
+from ..discrete import TOUCH_TOL, complementarity
 
-__all__ = ["psi_certificate"]
+__all__ = ["psi_certificate", "contact_multipliers", "certify_contact"]
 
 
 def psi_certificate(dp, modes, u, lam, rows, levels=None) -> dict:
@@ -66,16 +67,13 @@ def psi_certificate(dp, modes, u, lam, rows, levels=None) -> dict:
     r = dp.gradient(u)
     if lam is not None:
         r = r - rows.T @ lam
-    GPhi = np.asarray(dp.G @ modes.phi)
-    H = dp.hessian(u)  # (a bonded foundation's c M included)
-    H = H.toarray() if hasattr(H, "toarray") else np.asarray(H)
-    H = H + 2.0 * (GPhi * modes.c) @ GPhi.T
-    try:
-        factor = la.cho_factor(0.5 * (H + H.T))
-    except la.LinAlgError:
+    L = _psi_factor(dp, modes, u)  # (a bonded foundation's c M included)
+    if L is None:
         return {"stationarity": math.inf}
-    scale = math.sqrt(max(float(u @ (H @ u)), 0.0)) or 1.0
-    out = {"stationarity": math.sqrt(max(float(r @ la.cho_solve(factor, r)), 0.0)) / scale}
+    Lu = L.T @ u
+    scale = math.sqrt(max(float(Lu @ Lu), 0.0)) or 1.0
+    y = la.solve_triangular(L, r, lower=True)
+    out = {"stationarity": math.sqrt(max(float(y @ y), 0.0)) / scale}
     if lam is not None:
         gap = rows @ u - levels
         size = max(float(np.max(np.abs(u[dp._w_rows()]), initial=0.0)), 1e-300)
@@ -84,6 +82,79 @@ def psi_certificate(dp, modes, u, lam, rows, levels=None) -> dict:
                    dual=float(max(-np.min(lam, initial=0.0), 0.0) / lam_scale),
                    complementarity=complementarity(lam, gap, scale, size))
     return out
+
+
+def _psi_factor(dp, modes, u):
+    """Cholesky factor of ``H_psi`` at ``u`` (None where it is not positive definite)."""
+    GPhi = np.asarray(dp.G @ modes.phi)
+    H = dp.hessian(u)
+    H = H.toarray() if hasattr(H, "toarray") else np.asarray(H)
+    H = H + 2.0 * (GPhi * modes.c) @ GPhi.T
+    try:
+        return la.cholesky(0.5 * (H + H.T), lower=True)
+    except la.LinAlgError:
+        return None
+
+
+def contact_multipliers(dp, modes, u, rows, levels):
+    """Obstacle multipliers of ``u`` recomputed on the rows it actually touches.
+
+    A row whose gap exceeds ``TOUCH_TOL`` of the answer's size carries no force
+    (complementarity); on the touching rows the non-negative multipliers that
+    minimise the stationarity residual in the certificate's own metric
+    (``r' H_psi^-1 r``, a non-negative least-squares problem after the Cholesky
+    factor).  An interior-point solver leaves its multipliers on rows far from
+    the obstacle at its own tolerance instead (measured: 1e-9 of nothing on a
+    channel's ceiling 0.08 m away, a complementarity residual of 6.8e-12 against
+    the certificate's 1e-12), although the point meets the optimality conditions.
+
+    Returns
+    -------
+    ndarray or None
+        One multiplier per row (zero off contact), or None where ``H_psi`` is
+        not positive definite.
+    """
+    L = _psi_factor(dp, modes, u)
+    if L is None:
+        return None
+    gap = rows @ u - levels
+    size = max(float(np.max(np.abs(u[dp._w_rows()]), initial=0.0)), 1e-300)
+    act = np.flatnonzero(gap <= TOUCH_TOL * size)
+    lam = np.zeros(rows.shape[0])
+    if len(act):
+        g = dp.gradient(u)
+        M = la.solve_triangular(L, rows[act].toarray().T, lower=True)
+        b = la.solve_triangular(L, g, lower=True)
+        lam[act] = so.nnls(M, b)[0]
+    return lam
+
+
+def certify_contact(dp, modes, u, lam, rows, levels) -> dict:
+    """The certificate of :func:`psi_certificate` with the better of two sets of multipliers.
+
+    The optimality conditions hold when *some* multipliers satisfy them: those
+    of the solver (``lam``) and those recomputed on the touching rows
+    (:func:`contact_multipliers`) are both tried, each checked in full, and the
+    measures of one that passes (the recomputed ones first) are returned.
+
+    Returns
+    -------
+    residual : dict
+    lam : ndarray or None
+        The multipliers the measures belong to.
+    """
+    from ..newton import passes
+
+    tried = []
+    mine = contact_multipliers(dp, modes, u, rows, levels)
+    for cand in (mine, lam):
+        if cand is None:
+            continue
+        res = psi_certificate(dp, modes, u, cand, rows, levels)
+        if passes(res):
+            return res, cand
+        tried.append((res, cand))
+    return tried[-1] if tried else ({"stationarity": math.inf}, lam)
 
 
 def contact_polish(dp, u, lam, rows, levels, max_iter: int = 12):

@@ -49,7 +49,7 @@ from ..newton import answer, certify, passes
 from . import bnb
 from .bnb import branch_and_bound
 from .bounds import amplitude_box, check_bounded
-from .certificate import contact_polish, psi_certificate
+from .certificate import certify_contact, contact_polish
 from .modes import unstable_modes
 from .node import NodeProgram
 
@@ -350,7 +350,11 @@ def _run(dp, modes, max_nodes, t0, fast=False):
     if dp.contact == "obstacle":
         # An obstacle may hold the beam against its unstable modes, where the
         # energy's Hessian is indefinite: measured in the convex part's metric.
-        residual = psi_certificate(dp, modes, mf.to_hermite(z), lam, prog.rows, prog.levels)
+        # The multipliers are recomputed on the touching rows too (an interior-point
+        # solver leaves its tolerance on rows far from the obstacle): either set
+        # that meets every condition certifies the answer.
+        residual, lam = certify_contact(dp, modes, mf.to_hermite(z), lam, prog.rows,
+                                        prog.levels)
     else:
         residual = certify(mf, z, lam)
     parts = mf.energy_parts(z)
