@@ -6,12 +6,13 @@ the Gao term it is smooth, and with a deformable foundation its gradient is
 semismooth (the positive part), so Newton's method with the generalised
 Hessian and a line search is globally convergent and ends in a handful of O(N)
 iterations.  A rigid obstacle is handled by the method of multipliers
-(augmented Lagrangian): each inner problem is exactly a foundation problem
-(a positive-part penalty shifted by the multipliers), solved by the same
-semismooth Newton method, and the multipliers are updated until the obstacle
-is respected to round-off.  Unlike a primal-dual active-set method this does
-not need linearly independent active constraints, which a beam lying flat on
-the obstacle does not have.
+(augmented Lagrangian, :mod:`gaocvx.contact_newton`): each inner problem is
+exactly a foundation problem (a positive-part penalty shifted by the
+multipliers), solved by the same semismooth Newton method
+(:func:`_newton_step`, :func:`_newton`), and the multipliers are updated until
+the obstacle is respected to round-off.  Unlike a primal-dual active-set
+method this does not need linearly independent active constraints, which a
+beam lying flat on the obstacle does not have.
 
 All of it runs on :class:`~gaocvx.mixed.MixedForm`, the well-conditioned
 variables (w, theta, chord slope), with banded KKT solves.  The stopping test
