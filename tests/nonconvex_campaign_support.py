@@ -250,8 +250,9 @@ def run_case(case: Case, starts: int = 24, seed: int = 0) -> dict:
     wrows = np.flatnonzero(en.free % 2 == 0)
     phi = vecs[:, 0] / max(float(np.max(np.abs(vecs[wrows, 0]))), 1e-300)
     sl = en.D @ phi
-    amp = math.sqrt(max(3 * (en.p - lam[0]) * float(en.wq @ sl**2) / (en.a * float(en.wq @ sl**4)), 0)
-                    ) if en.a > 0 else 1.0
+    # the one-mode amplitude A^2 = 3 (p - lambda_1) ∫phi'^2 / (a ∫phi'^4), phi of peak 1
+    i2, i4 = float(en.wq @ sl**2), float(en.wq @ sl**4)
+    amp = math.sqrt(max(3 * (en.p - lam[0]) * i2 / (en.a * i4), 0.0)) if en.a > 0 else 1.0
     pts = en.starts(rng, starts // 2, 1.0, extra=[x, -x]) + en.starts(rng, starts - starts // 2,
                                                                       max(amp, 1e-3))
     found = []

@@ -90,3 +90,19 @@ def test_beam_pressed_flat_onto_an_obstacle_above_the_limit(monkeypatch):
             "obstacle": {"gap": 0.0}}
     r = solve(Scene.from_dict(data), "global")
     assert r.status == "optimal", r.message
+
+
+@pytest.mark.xfail(strict=True, reason="a stiff bonded bed with a gap (k_F = 1.65e12 N/m^2, "
+                   "5.6 cm), P = 1.0024 P_hat_h: branch and bound ends after 5 node programs with "
+                   "a certified gap of 1.9e-3 of the energy scale (7.8e6 J) and reports "
+                   "'inaccurate' (campaign scene 1:29)")
+def test_stiff_bonded_bed_just_above_its_limit_is_certified():
+    data = {"beam": {"model": "gao", "supports": "P1", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                     "half_thickness": 0.1, "width": 1.0},
+            "load": {"q": [[0.0, -2471021.7017371245], [1.0, -3749977.869407841]],
+                     "axial": 28580722437.07982},
+            "mesh": {"elements": 12},
+            "foundation": {"gap": 0.056006019735536025, "stiffness": 1652534719446.669,
+                           "kind": "bilateral"}}
+    r = solve(Scene.from_dict(data), "global")
+    assert r.status == "optimal", r.message
