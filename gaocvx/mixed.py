@@ -488,6 +488,40 @@ class MixedForm:
             g -= self.AT @ force
         return g
 
+    def directional(self, z, d, shift=None, rho=0.0):
+        """``t -> gradient(z + t d, shift, rho) @ d``, for a line search along ``d``.
+
+        Every term is a function of linear images of z (curvatures, slopes,
+        depths, gaps), so those of z and d are computed once and each trial
+        step costs a few O(N) vector operations instead of six sparse products
+        (a 256-element sweep value made 16 gradient calls, mostly here).  The
+        same sums as :meth:`gradient`, in the same order: agreement to
+        round-off is tested.
+        """
+        dp = self.dp
+        c0, cd = self.curvatures(z), self.B2 @ d
+        wc, fd = self.wq2 * cd, float(self.f @ d)
+        if self.has_slope:
+            s0, sd = self.slopes(z), self.B1 @ d
+            ws = self.wq5 * sd
+        if dp.contact == "foundation":
+            p0, pd = self.depth(z), self.Nq @ d
+            wp = dp.c * self.wqc * pd
+        if shift is not None:
+            g0, gd = self.gap(z), self.A @ d
+
+        def dphi(t: float) -> float:
+            out = float(wc @ (c0 + t * cd)) - fd
+            if self.has_slope:
+                s = s0 + t * sd
+                out += float(ws @ (s * (dp.a / 3.0 * (s * s) - dp.p)))
+            if dp.contact == "foundation":
+                out -= float(wp @ dp.penetration(p0 - t * pd))
+            if shift is not None:
+                out -= float(gd @ np.maximum(shift - rho * (g0 + t * gd), 0.0))
+            return out
+        return dphi
+
     def active_sets(self, z, shift=None, rho=0.0):
         """Where the contact terms act at ``z``: (foundation mask, obstacle mask)."""
         dp = self.dp

@@ -209,8 +209,8 @@ def _newton(mf: MixedForm, z, tol, max_iter, al):
         if decrement == math.inf and float(g @ d) + float(mu @ (mf.C @ d)) > 0:
             d = -d  # H numerically indefinite (P within round-off of P_bar_h): go downhill
         shift = float(mu @ (mf.C @ d))
-        t = line_search(lambda s: float(mf.gradient(z + s * d, **al) @ d) + shift,
-                        float(g @ d) + shift)
+        dphi = mf.directional(z, d, **al)
+        t = line_search(lambda s: dphi(s) + shift, float(g @ d) + shift)
         if t is None:
             return z, it, "line search stalled (round-off level)"
         z = z + t * d
@@ -247,8 +247,8 @@ def _newton_step(mf: MixedForm, z, al, rounds):
     if decrement == math.inf and float(g @ d) + float(mu @ (mf.C @ d)) > 0:
         d = -d
     shift = float(mu @ (mf.C @ d))
-    t = line_search(lambda s: float(mf.gradient(z + s * d, **al) @ d) + shift,
-                    float(g @ d) + shift)
+    dphi = mf.directional(z, d, **al)
+    t = line_search(lambda s: dphi(s) + shift, float(g @ d) + shift)
     if t is None:
         return z, None, factorisations, False
     z = z + t * d
