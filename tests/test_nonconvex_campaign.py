@@ -75,11 +75,6 @@ def test_untouched_channel_is_certified():
     assert r.status == "optimal", r.message
 
 
-@pytest.mark.xfail(strict=True, reason="a cantilever pressed flat onto an obstacle at gap 0 "
-                   "above P_bar_h: the minimiser is w = 0 (energy 0, energy scale 0), so the gap "
-                   "can never be within 1e-8 of the scale; branch and bound runs to its 4000-node "
-                   "limit (44 s at 8 elements, the 120 s time limit at 24 elements) and reports "
-                   "'inaccurate' with a negative gap (campaign scene 1:11)")
 def test_beam_pressed_flat_onto_an_obstacle_above_the_limit(monkeypatch):
     import gaocvx.nonconvex.bnb as bnb
     # the time limit cut to 5 s to keep the suite fast; 44 s do not certify it either

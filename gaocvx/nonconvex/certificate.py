@@ -10,11 +10,19 @@ Hermite KKT residual was 1e-7).
 
 The energy is ``-sum c_i s_i^2 + Psi(u)`` with ``Psi`` convex
 (nonconvex.md), so the Hessian of ``Psi``,
-``H_psi = H + 2 sum c_i (G phi_i)(G phi_i)'``, is positive (semi)definite
-everywhere and serves as the metric instead: the same measures as the
-project's certificate (stationarity of the Lagrangian as a relative dual norm,
-feasibility, the multipliers' sign, complementarity), with ``H_psi`` in place
-of ``H``.  The global gap is certified separately, by branch and bound.
+``H + 2 sum c_i (G phi_i)(G phi_i)'``, is positive semidefinite everywhere.
+Only semidefinite: at ``w = 0`` its curvature along ``phi_i`` is
+``lambda_i - p + 2 c_i``, the eigenvectors' margin ``2 delta`` (about 1e-19 of
+``c``), and a beam lying flat on an obstacle has ``w = 0`` (measured: a residual
+of 1e-16 became a stationarity of 1e-4 of the answer's floor).  So the metric is
+``H_psi = H + 4 sum c_i (G phi_i)(G phi_i)'``, the Hessian of
+``Psi + sum c_i s_i^2``: positive definite with the margin
+``min(p - lambda_k, lambda_{k+1} - p)`` at ``w = 0``, and within a factor of
+about two of the convex part's along the modes at a buckled answer (where the
+Gao term adds about ``4 c_i``).  The measures are the project's (stationarity
+of the Lagrangian as a relative dual norm, feasibility, the multipliers' sign,
+complementarity), with ``H_psi`` in place of ``H``.  The global gap is
+certified separately, by branch and bound.
 
 Examples
 --------
@@ -41,7 +49,7 @@ from ..discrete import TOUCH_TOL, complementarity
 __all__ = ["psi_certificate", "contact_multipliers", "certify_contact"]
 
 
-def psi_certificate(dp, modes, u, lam, rows, levels=None) -> dict:
+def psi_certificate(dp, modes, u, lam, rows, levels=None, floor: float = 0.0) -> dict:
     """Optimality measures of free Hermite DOFs ``u`` in the metric of the convex part ``Psi``.
 
     Parameters
@@ -56,6 +64,11 @@ def psi_certificate(dp, modes, u, lam, rows, levels=None) -> dict:
         The obstacle's constraint rows on the free DOFs.
     levels : ndarray, optional
         The obstacle's level at each row.
+    floor : float
+        The least size an answer is measured against (non-dimensional, as
+        :attr:`gaocvx.mixed.MixedForm.zero_floor`): a beam lying flat on an
+        obstacle has an answer that is zero to round-off, and relative measures
+        of it would compare round-off with round-off.
 
     Returns
     -------
@@ -71,12 +84,12 @@ def psi_certificate(dp, modes, u, lam, rows, levels=None) -> dict:
     if L is None:
         return {"stationarity": math.inf}
     Lu = L.T @ u
-    scale = math.sqrt(max(float(Lu @ Lu), 0.0)) or 1.0
+    scale = max(math.sqrt(max(float(Lu @ Lu), 0.0)), floor) or 1.0
     y = la.solve_triangular(L, r, lower=True)
     out = {"stationarity": math.sqrt(max(float(y @ y), 0.0)) / scale}
     if lam is not None:
         gap = rows @ u - levels
-        size = max(float(np.max(np.abs(u[dp._w_rows()]), initial=0.0)), 1e-300)
+        size = _size(dp, u, floor)
         lam_scale = float(np.max(np.abs(lam), initial=0.0)) or 1.0
         out.update(feasibility=float(max(-np.min(gap, initial=0.0), 0.0) / size),
                    dual=float(max(-np.min(lam, initial=0.0), 0.0) / lam_scale),
@@ -84,58 +97,76 @@ def psi_certificate(dp, modes, u, lam, rows, levels=None) -> dict:
     return out
 
 
+def _size(dp, u, floor):
+    """The answer's largest nodal |w|, at least ``floor``."""
+    return max(float(np.max(np.abs(u[dp._w_rows()]), initial=0.0)), floor, 1e-300)
+
+
 def _psi_factor(dp, modes, u):
     """Cholesky factor of ``H_psi`` at ``u`` (None where it is not positive definite)."""
     GPhi = np.asarray(dp.G @ modes.phi)
     H = dp.hessian(u)
     H = H.toarray() if hasattr(H, "toarray") else np.asarray(H)
-    H = H + 2.0 * (GPhi * modes.c) @ GPhi.T
+    # 4 c, not 2 c: the convex part's own Hessian is singular along the modes at
+    # w = 0 (the module's notes)
+    H = H + 4.0 * (GPhi * modes.c) @ GPhi.T
     try:
         return la.cholesky(0.5 * (H + H.T), lower=True)
     except la.LinAlgError:
         return None
 
 
-def contact_multipliers(dp, modes, u, rows, levels):
+def contact_multipliers(dp, modes, u, rows, levels, floor: float = 0.0) -> list:
     """Obstacle multipliers of ``u`` recomputed on the rows it actually touches.
 
     A row whose gap exceeds ``TOUCH_TOL`` of the answer's size carries no force
-    (complementarity); on the touching rows the non-negative multipliers that
-    minimise the stationarity residual in the certificate's own metric
-    (``r' H_psi^-1 r``, a non-negative least-squares problem after the Cholesky
-    factor).  An interior-point solver leaves its multipliers on rows far from
-    the obstacle at its own tolerance instead (measured: 1e-9 of nothing on a
-    channel's ceiling 0.08 m away, a complementarity residual of 6.8e-12 against
-    the certificate's 1e-12), although the point meets the optimality conditions.
+    (complementarity); on the touching rows, non-negative multipliers that
+    minimise the stationarity residual (non-negative least squares).  An
+    interior-point solver leaves its multipliers on rows far from the obstacle
+    at its own tolerance instead (measured: 1e-9 of nothing on a channel's
+    ceiling 0.08 m away, a complementarity residual of 6.8e-12 against the
+    certificate's 1e-12), although the point meets the optimality conditions.
 
     Returns
     -------
-    ndarray or None
-        One multiplier per row (zero off contact), or None where ``H_psi`` is
-        not positive definite.
+    list of ndarray
+        Two candidates, one multiplier per row (zero off contact): the residual
+        minimised in the certificate's own metric ``r' H_psi^-1 r`` (after the
+        Cholesky factor), and in the Euclidean norm.  The second is far better
+        conditioned (measured on a beam lying flat on 8 elements: the metric
+        problem's condition number 2e9 left a residual 3e-4 of the answer's
+        floor; the Euclidean one is exact to round-off when the touching rows
+        can balance the load).
     """
-    L = _psi_factor(dp, modes, u)
-    if L is None:
-        return None
     gap = rows @ u - levels
-    size = max(float(np.max(np.abs(u[dp._w_rows()]), initial=0.0)), 1e-300)
-    act = np.flatnonzero(gap <= TOUCH_TOL * size)
-    lam = np.zeros(rows.shape[0])
-    if len(act):
-        g = dp.gradient(u)
-        M = la.solve_triangular(L, rows[act].toarray().T, lower=True)
-        b = la.solve_triangular(L, g, lower=True)
-        lam[act] = so.nnls(M, b)[0]
-    return lam
+    act = np.flatnonzero(gap <= TOUCH_TOL * _size(dp, u, floor))
+    if len(act) == 0:
+        return [np.zeros(rows.shape[0])]
+    g = dp.gradient(u)
+    At = rows[act].toarray().T
+    systems = [(At, g)]
+    L = _psi_factor(dp, modes, u)
+    if L is not None:
+        systems.insert(0, (la.solve_triangular(L, At, lower=True),
+                           la.solve_triangular(L, g, lower=True)))
+    out = []
+    for M, b in systems:
+        lam = np.zeros(rows.shape[0])
+        try:
+            lam[act] = so.nnls(M, b, maxiter=50 * len(act))[0]
+        except RuntimeError:  # no convergence within maxiter: no candidate
+            continue
+        out.append(lam)
+    return out
 
 
-def certify_contact(dp, modes, u, lam, rows, levels) -> dict:
-    """The certificate of :func:`psi_certificate` with the better of two sets of multipliers.
+def certify_contact(dp, modes, u, lam, rows, levels, floor: float = 0.0) -> tuple:
+    """The certificate of :func:`psi_certificate` with the best of several sets of multipliers.
 
     The optimality conditions hold when *some* multipliers satisfy them: those
     of the solver (``lam``) and those recomputed on the touching rows
-    (:func:`contact_multipliers`) are both tried, each checked in full, and the
-    measures of one that passes (the recomputed ones first) are returned.
+    (:func:`contact_multipliers`) are all tried, each checked in full, and the
+    measures of the first that passes (the recomputed ones first) are returned.
 
     Returns
     -------
@@ -146,11 +177,10 @@ def certify_contact(dp, modes, u, lam, rows, levels) -> dict:
     from ..newton import passes
 
     tried = []
-    mine = contact_multipliers(dp, modes, u, rows, levels)
-    for cand in (mine, lam):
+    for cand in contact_multipliers(dp, modes, u, rows, levels, floor) + [lam]:
         if cand is None:
             continue
-        res = psi_certificate(dp, modes, u, cand, rows, levels)
+        res = psi_certificate(dp, modes, u, cand, rows, levels, floor)
         if passes(res):
             return res, cand
         tried.append((res, cand))

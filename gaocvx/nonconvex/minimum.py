@@ -48,7 +48,7 @@ from ..mixed import MixedForm
 from ..newton import answer, certify, passes
 from . import bnb
 from .bnb import branch_and_bound
-from .bounds import amplitude_box, check_bounded
+from .bounds import amplitude_box, check_bounded, load_constant
 from .certificate import certify_contact, contact_polish
 from .modes import unstable_modes
 from .node import NodeProgram
@@ -64,6 +64,10 @@ log = logging.getLogger(__name__)
 GAP_TOL = 1e-8
 GAP_TARGET = 1e-11
 MAX_NODES = 4000
+# The energy scale's floor, as a fraction of the scene's own energy (see
+# scene_energy): an answer whose energy is far below it (a beam pressed flat onto
+# an obstacle: w = 0, energy 0) has its gap measured against this instead.
+ENERGY_FLOOR = 1.0
 # The node programs are dense (A_rho is banded plus rank k, its factor dense), and
 # their model of the quadratic part carries round-off growing with N (measured at
 # nonconvex.md's example: 1e-12 of the energy at 64 elements, 1.2e-8 at 128, where
@@ -90,6 +94,21 @@ def one_mode_amplitude(dp, modes) -> float:
     slopes = dp.B1 @ modes.phi[:, 0]
     quartic = float(dp.wq_gao @ slopes**4)
     return math.sqrt(max(3.0 * (dp.p - modes.lam[0]) / (dp.a * quartic), 0.0))
+
+
+def scene_energy(dp, modes) -> float:
+    """The scene's own energy scale (non-dimensional, in the units of ``dp``).
+
+    ``c0 + c_1 A^2 / 2``: ``c0 = f'K^-1 f / 2`` is minus the energy of the
+    unsupported linear answer, ``c_1 A^2 / 2`` minus that of the free beam
+    buckled along its first mode at the one-mode amplitude ``A``.  Both are
+    properties of the scene (load, beam, P), not of the answer; the node
+    programs' accuracy is absolute in these units (Clarabel's 1e-12), so a gap
+    can be certified relative to this energy, but not relative to an answer
+    whose own energy is zero.
+    """
+    A = one_mode_amplitude(dp, modes)
+    return load_constant(dp) + 0.5 * float(modes.c[0]) * A * A
 
 
 def rescale_for(dp, modes):
@@ -313,7 +332,8 @@ def _run(dp, modes, max_nodes, t0, fast=False):
     # those of (K + c M, G), whose lambda_1 is no bound of it: none is used then.
     lam1 = 0.0 if getattr(dp, "bilateral", False) else float(modes.lam[0]) * (1.0 - 1e-9)
     lo, hi = amplitude_box(dp, k, upper=start[0], lam1=lam1)
-    scale = max(sum(abs(v) for v in dp.energy_parts(start[1]).values()), 1e-300)
+    floor = ENERGY_FLOOR * scene_energy(dp, modes)
+    scale = max(sum(abs(v) for v in dp.energy_parts(start[1]).values()), floor, 1e-300)
     out = branch_and_bound(prog, _feasible_energy(dp, prog), lo, hi, GAP_TARGET * scale,
                            max_nodes, start)
     if out.s is None:
@@ -354,11 +374,11 @@ def _run(dp, modes, max_nodes, t0, fast=False):
         # solver leaves its tolerance on rows far from the obstacle): either set
         # that meets every condition certifies the answer.
         residual, lam = certify_contact(dp, modes, mf.to_hermite(z), lam, prog.rows,
-                                        prog.levels)
+                                        prog.levels, mf.zero_floor if mf.has_load else 0.0)
     else:
         residual = certify(mf, z, lam)
     parts = mf.energy_parts(z)
-    scale = max(sum(abs(v) for v in parts.values()), 1e-300)
+    scale = max(sum(abs(v) for v in parts.values()), floor, 1e-300)
     upper = sum(parts.values())
     # (a negative gap would be a bound above an admissible energy: reported as is)
     gap = upper - out.lower
@@ -386,4 +406,6 @@ def _run(dp, modes, max_nodes, t0, fast=False):
             "alternatives": [{"u": a[1], "energy": float(a[0] * dp.E0),
                               "amplitudes": [float(x) for x in a[2]]} for a in alternatives]}
     size = mf.deflection_size(z)
+    if mf.has_load and size <= mf.zero_floor:
+        size = 1.0  # zero to round-off (lying flat on an obstacle): no scale of its own
     return raw, info, size
