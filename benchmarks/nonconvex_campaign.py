@@ -197,11 +197,13 @@ def table(records, shor_rows, command, elapsed) -> str:
                        f"{sum('unsolved' in row for row in g)} | {sum('failed' in row for row in g)} |")
         out += ["", "`unsolved`: the relaxation or the global method ended without \"optimal\" (the "
                 "global method's inaccurate answers are listed above); `failed`: a rule broken.", ""]
-        nl = [row for row in shor_rows if row.get("tight") is False and "none" in row["tags"]]
+        nl = [row for row in shor_rows if row.get("tight") is False and "no-load" in row["tags"]
+              and _kind(row["tags"]) == "none"]
         if nl:
-            out += [f"Loose without contact: {len(nl)} (without transverse load the relaxation "
-                    "averages the two mirror minimisers: u = 0, Z of rank two, value equal to the "
-                    "minimum: " + ", ".join(f"{row['rel']:.1e}" for row in nl) + ").", ""]
+            out += [f"Loose without load and contact: {len(nl)}, relative gaps "
+                    + ", ".join(f"{row['rel']:.1e}" for row in nl) + " (with one unstable mode "
+                    "the relaxation averages the two mirror minimisers, u = 0 and Z of rank two, "
+                    "at the minimum's value; with more it may lie below).", ""]
         for row in shor_rows:
             if "failed" in row:
                 out += [f"- failed: {row['failed']}", "", "  ```",

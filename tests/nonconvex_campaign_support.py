@@ -127,7 +127,7 @@ def random_scene(rng, elements=None) -> Case:
     sign = -1.0 if rng.random() < 0.8 else 1.0
     kind = str(rng.choice(["none", "uniform", "table", "points", "mixed"],
                           p=[0.15, 0.3, 0.2, 0.2, 0.15]))
-    tags.append(kind)
+    tags.append("no-load" if kind == "none" else kind)
     load = {}
     if kind in ("uniform", "mixed"):
         load["q"] = sign * Q
