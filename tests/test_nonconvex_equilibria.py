@@ -148,3 +148,86 @@ def test_two_unstable_modes(q):
     assert eqs[0].stable and multistart(scene, W) == pytest.approx(eqs[0].energy, rel=1e-9)
     if q is None:   # 0 (a maximum of F), two mirror minima, two mirror saddles
         assert len(eqs) == 5 and sum(e.stable for e in eqs) == 2 and eqs[-1].energy == 0.0
+
+
+# --------------------------------------------------------------------- fast path
+def _same_equilibria(fast, dense, S):
+    """The same equilibria: count, stability, energies, amplitudes (paired by amplitude)."""
+    assert len(fast) == len(dense)
+    for e in dense:
+        f = min(fast, key=lambda x: np.linalg.norm(np.subtract(x.amplitudes, e.amplitudes)))
+        assert np.linalg.norm(np.subtract(f.amplitudes, e.amplitudes)) <= 1e-7 * S
+        assert f.stable == e.stable and f.status == e.status == "optimal"
+        assert f.energy == pytest.approx(e.energy, rel=1e-9, abs=1e-9 * abs(dense[0].energy))
+        assert np.max(np.abs(f.w - e.w)) <= 1e-7 * np.max(np.abs(e.w), initial=1e-300) + 1e-15
+
+
+@pytest.mark.parametrize("supports, kw", [
+    ("P4", dict(q=-1e7, axial=1.3e9, elements=16)),     # k = 1, imperfect: three
+    ("P3", dict(q=None, axial=6e8, elements=24)),        # k = 1, perfect: 0 and two mirror images
+])
+def test_fast_equilibria_are_the_dense_programs_equilibria(supports, kw):
+    scene = Scene.from_dict(scene_dict(supports, **kw))
+    fast, dense = equilibria(scene, fast=True), equilibria(scene, fast=False)
+    assert len(dense) == 3
+    _same_equilibria(fast, dense, max(abs(e.amplitudes[0]) for e in dense))
+
+
+@pytest.mark.slow
+def test_fast_equilibria_with_two_modes_are_the_dense_programs_equilibria():
+    scene = Scene.from_dict(scene_dict("P1", q=-5e7, axial=1.1e10, elements=16))
+    fast, dense = equilibria(scene, fast=True), equilibria(scene, fast=False)
+    assert len(dense) == 5
+    _same_equilibria(fast, dense, max(np.linalg.norm(e.amplitudes) for e in dense))
+
+
+def test_equilibria_on_512_elements_follow_the_one_mode_estimate():
+    """Beyond the dense programs' 128 elements (fast path): q = 0 just above lambda_1,
+    the two buckled equilibria have the one-mode amplitude (independent eigenvector)."""
+    from test_nonconvex import BeamProblem, pencil
+    from threadpoolctl import threadpool_limits
+    base = Scene.from_dict(scene_dict("P4", q=None, axial=1.3e9, elements=512))
+    bp = BeamProblem(base)
+    K, G, _ = pencil(bp)
+    with threadpool_limits(1):   # (measured: 17 s instead of 0.8 on the shared cores)
+        lam, vec = sla.eigh(K, G, subset_by_index=[0, 0])
+    lam1 = lam[0] * bp.EI / (bp.mu * bp.L**2)
+    phi = np.zeros(bp.ndof)
+    phi[bp.free] = vec[:, 0]
+    slopes = np.einsum("eqi,ei->eq", np.asarray(bp.D5, float), phi[bp.dofs])  # L = 1
+    w5 = np.asarray(bp.w5, float)
+    i2, i4 = np.sum(w5 * slopes**2), np.sum(w5 * slopes**4)
+    P = lam1 * (1.0 + 1e-4)
+    A = np.sqrt((P - lam1) * bp.mu * i2 / (bp.Ealpha / 3.0 * i4)) * np.max(np.abs(phi[0::2]))
+    eqs = equilibria(base.with_overrides({"load.axial": P}))
+    assert [e.stable for e in eqs] == [True, True, False]
+    assert all(e.status == "optimal" for e in eqs)
+    assert eqs[2].energy == 0.0 and not np.any(eqs[2].w)
+    for e in eqs[:2]:
+        # (the 16-element test of test_nonconvex.py: below 1e-3 at 1e-4 above lambda_1)
+        assert abs(np.max(np.abs(e.w)) / A - 1.0) < 1e-3
+    # mirror images: the same energy, to 1e-9 of the energy's scale (the axial
+    # work 1/2 P ∫ w'^2: the buckled energy itself is 1e-4 of it here)
+    slope2 = eqs[0].slope**2
+    scale = 0.5 * P * float(np.sum(0.5 * (slope2[1:] + slope2[:-1]) * np.diff(eqs[0].x)))
+    assert abs(eqs[0].energy - eqs[1].energy) <= 1e-9 * scale
+    assert np.allclose(eqs[0].w, -eqs[1].w, atol=1e-9 * np.max(np.abs(eqs[0].w)))
+
+
+def test_path_on_256_elements_converges_with_the_mesh():
+    """A path beyond 128 elements (fast path): each buckled equilibrium's w_c at 64, 128
+    and 256 elements converges like h^4 (Hermite cubics), stable and unstable alike."""
+    from threadpoolctl import threadpool_limits
+    P = [0.5e9, 1.5e9]
+    w = {}
+    with threadpool_limits(1):
+        for n in (64, 128, 256):
+            path = equilibrium_path(Scene.from_dict(scene_dict("P4", q=-1e7, elements=n)), P)
+            assert not path.errors and all(pt["status"] == "optimal" for pt in path.points)
+            assert [len(path.at(p)) for p in P] == [1, 3]
+            w[n] = np.array([pt["w_c"] for pt in sorted(path.points,
+                                                         key=lambda pt: (pt["P"], pt["w_c"]))])
+    # below the limit (the convex minimiser) the meshes agree to the solver's accuracy
+    assert w[256][0] == pytest.approx(w[64][0], rel=1e-8)
+    ratio = np.abs(w[64][1:] - w[128][1:]) / np.abs(w[128][1:] - w[256][1:])
+    assert np.all((ratio > 14) & (ratio < 18)), ratio   # measured: 15.994 to 15.998

@@ -141,7 +141,11 @@ class FastProgram:
         """
         s0 = np.asarray(s0, float)
         self.solves += 1
-        z, nu, S, ok = self._slice(s0, self._z.copy())
+        # At s = 0 the straight beam lies on the slice (and is its answer when
+        # nothing loads the beam): started there, an unloaded beam stays exactly
+        # straight, where the previous slice's answer left w of 1e-187.
+        start = self._z.copy() if np.any(s0) else np.zeros(self.mf.n)
+        z, nu, S, ok = self._slice(s0, start)
         if not np.all(np.isfinite(z)):
             z, nu, S, ok = self._slice(s0, np.zeros(self.mf.n))
         self._z = z

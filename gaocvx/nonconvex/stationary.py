@@ -127,7 +127,8 @@ def _convex_equilibrium(scene, elements, dp) -> list:
                         float(scene.load.axial))]
 
 
-def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID) -> list:
+def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
+               fast: bool | None = None) -> list:
     """Every equilibrium of ``scene`` (k <= 1 unstable modes), sorted by energy.
 
     Parameters
@@ -140,6 +141,12 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID) -
         grid: a path's previous equilibria.
     grid : int
         Grid points over the amplitude range.
+    fast : bool, optional
+        The reduced function through the banded Newton machinery
+        (:class:`.fast.FastProgram`, any mesh up to ``api.MAX_FAST_ELEMENTS``)
+        instead of the dense CVXPY programs (:class:`.node.NodeProgram`, the
+        ground truth, at most ``minimum.MAX_ELEMENTS``); by default wherever it
+        serves: without an obstacle.
 
     Returns
     -------
@@ -148,9 +155,10 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID) -
     Raises
     ------
     SceneError
-        For scenes with more than one unstable mode, or without a minimiser.
+        For scenes with more than two unstable modes, without a minimiser, or
+        on too fine a mesh.
     """
-    from .api import provably_convex
+    from .api import MAX_FAST_ELEMENTS, provably_convex
     from .minimum import MAX_ELEMENTS, rescale_for
     from .modes import unstable_modes
     from .node import NodeProgram
@@ -159,9 +167,18 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID) -
     if provably_convex(dp):
         return _convex_equilibrium(scene, elements, dp)
     check_bounded(dp)
-    if dp.n_nodes - 1 > MAX_ELEMENTS:
+    n_el = dp.n_nodes - 1
+    # The fast path has no inequality constraints: an obstacle (or a channel)
+    # needs the dense programs.
+    eligible = dp.contact != "obstacle"
+    fast = eligible if fast is None else bool(fast)
+    if fast and not eligible:
+        raise SceneError("obstacle", "the fast path takes no obstacle", dp.contact)
+    cap = MAX_FAST_ELEMENTS if fast else MAX_ELEMENTS
+    if n_el > cap:
         raise SceneError("mesh.elements", f"equilibria above the convexity limit take at most "
-                         f"{MAX_ELEMENTS} elements", dp.n_nodes - 1)
+                         f"{MAX_ELEMENTS} elements with an obstacle (dense programs), "
+                         f"{MAX_FAST_ELEMENTS} without (fast path)", n_el)
     modes = unstable_modes(dp)
     if modes.k == 0:
         modes = unstable_modes(dp, min_k=1)
@@ -170,7 +187,11 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID) -
                          "modes; equilibria are searched for one or two (P below the third "
                          f"mode load {float(modes.loads[2]):.4g} N)", dp.P)
     dp = rescale_for(dp, modes)
-    prog = NodeProgram(dp, modes)
+    if fast:
+        from .fast import FastProgram
+        prog = FastProgram(dp, modes)
+    else:
+        prog = NodeProgram(dp, modes)
     # (with a bonded foundation the modes' lambda_1 is that of K + c M: no bound
     # of u'K u / t, so none is used; equilibrium_box counts the foundation itself)
     lam1 = 0.0 if getattr(dp, "bilateral", False) else float(modes.lam[0]) * (1.0 - 1e-9)
