@@ -45,7 +45,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Leaf", "BnBResult", "branch_and_bound"]
+__all__ = ["Leaf", "BnBResult", "branch_and_bound", "components"]
 
 log = logging.getLogger(__name__)
 
@@ -177,3 +177,26 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
              lower, len(leaves))
     return BnBResult(best[0], lower, best[1], best[2], best[3], nodes, leaves,
                      converged, failed)
+
+
+def components(leaves) -> list:
+    """Groups of leaves whose boxes touch (connected components)."""
+    n = len(leaves)
+    parent = list(range(n))
+
+    def find(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for i in range(n):
+        for j in range(i + 1, n):
+            a, b = leaves[i], leaves[j]
+            eps = 1e-12 * (1.0 + np.max(np.abs(np.r_[a.hi, b.hi])))
+            if np.all(a.lo <= b.hi + eps) and np.all(b.lo <= a.hi + eps):
+                parent[find(i)] = find(j)
+    groups = {}
+    for i in range(n):
+        groups.setdefault(find(i), []).append(leaves[i])
+    return list(groups.values())

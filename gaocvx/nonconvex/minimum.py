@@ -11,7 +11,8 @@ Steps (nonconvex.md):
 4. a box of amplitudes containing every minimiser (:mod:`.bounds`), tightened
    by the best energy of a few fixed-amplitude solves;
 5. branch and bound (:mod:`.bnb`) to a certified gap of
-   :data:`GAP_TARGET` of the energy scale (sum of |energy parts|);
+   :data:`GAP_TARGET` of the energy scale (sum of |energy parts|, at least the
+   scene's own energy, :func:`scene_energy`);
 6. polishing: the reduced function ``F(s)`` minimised from the best point
    (L-BFGS-B with its envelope gradient), then, without an obstacle, Newton on
    the full energy; the energy only goes down, so the certificate stands;
@@ -47,7 +48,7 @@ from ..errors import SceneError
 from ..mixed import MixedForm
 from ..newton import answer, certify, passes
 from . import bnb
-from .bnb import branch_and_bound
+from .bnb import branch_and_bound, components
 from .bounds import amplitude_box, check_bounded, load_constant
 from .certificate import certify_contact, contact_polish
 from .modes import unstable_modes
@@ -58,9 +59,9 @@ __all__ = ["solve_global", "GAP_TOL", "GAP_TARGET", "MAX_ELEMENTS", "to_mixed", 
 log = logging.getLogger(__name__)
 
 # A result is optimal only if its certified gap is at most GAP_TOL of the energy
-# scale (sum of |energy parts|); branch and bound aims at GAP_TARGET, which node
-# programs solved to 1e-12 reach in a few dozen nodes (the spec's example: 2.5e-10
-# of |Pi| in 47 nodes).
+# scale (sum of |energy parts|, at least ENERGY_FLOOR of scene_energy); branch and
+# bound aims at GAP_TARGET, which node programs solved to 1e-12 reach in a few
+# dozen nodes (the spec's example: 2.5e-10 of |Pi| in 47 nodes).
 GAP_TOL = 1e-8
 GAP_TARGET = 1e-11
 MAX_NODES = 4000
@@ -183,29 +184,6 @@ def _feasible_energy(dp, prog):
         return dp.energy(u) if np.min(gap, initial=0.0) >= -1e-9 * size else math.inf
 
     return energy
-
-
-def _components(leaves):
-    """Groups of leaves whose boxes touch (connected components)."""
-    n = len(leaves)
-    parent = list(range(n))
-
-    def find(i):
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    for i in range(n):
-        for j in range(i + 1, n):
-            a, b = leaves[i], leaves[j]
-            eps = 1e-12 * (1.0 + np.max(np.abs(np.r_[a.hi, b.hi])))
-            if np.all(a.lo <= b.hi + eps) and np.all(b.lo <= a.hi + eps):
-                parent[find(i)] = find(j)
-    groups = {}
-    for i in range(n):
-        groups.setdefault(find(i), []).append(leaves[i])
-    return list(groups.values())
 
 
 def _polish(dp, prog, s, u, lam, lo, hi):
@@ -346,7 +324,7 @@ def _run(dp, modes, max_nodes, t0, fast=False):
     near = [leaf for leaf in out.leaves if leaf.lower <= best_e + tol and leaf.s is not None]
     alternatives = []
     norm = lambda x: math.sqrt(max(float(x @ (dp.G @ x)), 0.0))  # noqa: E731
-    for group in _components(near)[:16]:
+    for group in components(near)[:16]:
         glo = np.min([leaf.lo for leaf in group], axis=0)
         ghi = np.max([leaf.hi for leaf in group], axis=0)
         if np.all(glo <= best_s) and np.all(best_s <= ghi):
