@@ -52,12 +52,12 @@ from __future__ import annotations
 import math
 import time
 import traceback
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from gaocvx import Scene, SceneError, SolverError, solve
 
+from campaign import Case, _loguniform as _logu  # the scenes of the campaign below P_bar
 from nonconvex_independent import Discrete
 
 __all__ = ["Case", "random_scene", "run_case", "TOL_E", "TOL_KKT", "TOL_HESS", "SLOW",
@@ -70,24 +70,6 @@ SLOW = 60.0
 MAX_MODES = 3        # documented in docs/nonconvex.md (global method)
 MAX_ELEMENTS = 128   # documented: the dense node programs
 THESIS_BEAM = {"length": 1.0, "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1, "width": 1.0}
-
-
-@dataclass
-class Case:
-    """One scene: its dict, how it was drawn and an id."""
-
-    data: dict
-    tags: tuple
-    id: str = ""
-    info: dict = field(default_factory=dict)
-
-    @property
-    def scene(self) -> Scene:
-        return Scene.from_dict(self.data)
-
-
-def _logu(rng, lo, hi):
-    return float(10 ** rng.uniform(math.log10(lo), math.log10(hi)))
 
 
 def _table(rng, L, lo, hi, k=None):

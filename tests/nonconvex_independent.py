@@ -89,14 +89,9 @@ class Discrete:
         self.bp, self.W, self.L = bp, float(W), bp.L
         self.E0 = bp.EI * self.W**2 / bp.L**3
         n_all = bp.ndof
-        K = np.zeros((n_all, n_all))
-        G = np.zeros((n_all, n_all))
-        np.add.at(K, (bp.dofs[:, :, None], bp.dofs[:, None, :]), np.asarray(bp.Ke, float))
-        np.add.at(G, (bp.dofs[:, :, None], bp.dofs[:, None, :]), np.asarray(bp.Ge, float))
-        free = bp.free
-        self.free = free
+        self.free = free = bp.free
         self.n = len(free)
-        self.K, self.G = K[np.ix_(free, free)], G[np.ix_(free, free)]
+        self.K, self.G, _ = pencil(bp)
 
         def stack(B):  # (ne, 5, 4) element rows -> dense (5 ne, free) matrix
             M = np.zeros((bp.ne * 5, n_all))
@@ -307,3 +302,31 @@ class Discrete:
             out.append(amplitude * rng.uniform(0.2, 3.0) * mix
                        + 0.05 * amplitude * rng.normal(size=self.n))
         return out[:max(count, 1)]
+
+
+def pencil(bp):
+    """The independent K and G (non-dimensional, L = 1 units) on the free DOFs, dense."""
+    S = bp.scaled(1.0)
+    n = bp.ndof
+    K = np.zeros((n, n))
+    G = np.zeros((n, n))
+    np.add.at(K, (bp.dofs[:, :, None], bp.dofs[:, None, :]), np.asarray(bp.Ke, float))
+    np.add.at(G, (bp.dofs[:, :, None], bp.dofs[:, None, :]), np.asarray(bp.Ge, float))
+    free = bp.free
+    return K[np.ix_(free, free)], G[np.ix_(free, free)], S
+
+
+def first_mode(bp):
+    """lambda_1 [N], the G-normalised mode phi (all DOFs) and int phi'^2, int phi'^4 (L = 1).
+
+    Dense generalised eigen-solve of the independent pencil (tests/independent.py),
+    for the one-mode amplitude A^2 = (P - lambda_1) mu I2 / ((E alpha / 3) I4).
+    """
+    K, G, _ = pencil(bp)
+    lam, vec = sla.eigh(K, G, subset_by_index=[0, 0])
+    lam1 = lam[0] * bp.EI / (bp.mu * bp.L**2)
+    phi = np.zeros(bp.ndof)
+    phi[bp.free] = vec[:, 0]
+    slopes = np.einsum("eqi,ei->eq", np.asarray(bp.D5, float), phi[bp.dofs])
+    w5 = np.asarray(bp.w5, float)
+    return lam1, phi, float(np.sum(w5 * slopes**2)), float(np.sum(w5 * slopes**4))

@@ -184,19 +184,13 @@ def test_fast_equilibria_with_two_modes_are_the_dense_programs_equilibria():
 def test_equilibria_on_512_elements_follow_the_one_mode_estimate():
     """Beyond the dense programs' 128 elements (fast path): q = 0 just above lambda_1,
     the two buckled equilibria have the one-mode amplitude (independent eigenvector)."""
-    from test_nonconvex import BeamProblem, pencil
+    from independent import BeamProblem
+    from nonconvex_independent import first_mode
     from threadpoolctl import threadpool_limits
     base = Scene.from_dict(scene_dict("P4", q=None, axial=1.3e9, elements=512))
     bp = BeamProblem(base)
-    K, G, _ = pencil(bp)
     with threadpool_limits(1):   # (measured: 17 s instead of 0.8 on the shared cores)
-        lam, vec = sla.eigh(K, G, subset_by_index=[0, 0])
-    lam1 = lam[0] * bp.EI / (bp.mu * bp.L**2)
-    phi = np.zeros(bp.ndof)
-    phi[bp.free] = vec[:, 0]
-    slopes = np.einsum("eqi,ei->eq", np.asarray(bp.D5, float), phi[bp.dofs])  # L = 1
-    w5 = np.asarray(bp.w5, float)
-    i2, i4 = np.sum(w5 * slopes**2), np.sum(w5 * slopes**4)
+        lam1, phi, i2, i4 = first_mode(bp)
     P = lam1 * (1.0 + 1e-4)
     A = np.sqrt((P - lam1) * bp.mu * i2 / (bp.Ealpha / 3.0 * i4)) * np.max(np.abs(phi[0::2]))
     eqs = equilibria(base.with_overrides({"load.axial": P}))
