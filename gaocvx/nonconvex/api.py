@@ -71,12 +71,6 @@ def _physical(dp, u) -> dict:
             "max": {"w": float(w[j]), "x": float(dp.x[j])}}
 
 
-def _fast_by_default(dp, modes) -> bool:
-    """Whether :func:`.minimum.solve_global` picks the fast path for this problem by default."""
-    from .minimum import MAX_ELEMENTS, fast_eligible
-    return fast_eligible(dp, modes.k) and (modes.k <= 2 or dp.n_nodes - 1 > MAX_ELEMENTS)
-
-
 def solve_global_result(scene, elements=None, problem=None, solver=None):
     """Solve ``scene`` by the global method and return its :class:`~gaocvx.result.Result`.
 
@@ -91,7 +85,7 @@ def solve_global_result(scene, elements=None, problem=None, solver=None):
     """
     from ..solve import _solve_exact, make_result
     from .bounds import check_bounded
-    from .minimum import MAX_ELEMENTS, solve_global
+    from .minimum import MAX_ELEMENTS, fast_by_default, solve_global
     from .modes import unstable_modes
 
     t0 = time.perf_counter()
@@ -121,7 +115,7 @@ def solve_global_result(scene, elements=None, problem=None, solver=None):
         modes = unstable_modes(dp, min_k=1)
     first = dp
     dp, raw, info = solve_global(dp, modes)
-    if raw["status"] != "optimal" and n_el <= MAX_ELEMENTS and _fast_by_default(first, modes):
+    if raw["status"] != "optimal" and n_el <= MAX_ELEMENTS and fast_by_default(first, modes.k):
         # The fast path's node bounds can stall where the dense programs certify (a
         # stiff unilateral bed 0.17 mm below a P4 beam just above P_bar_h: gap 0.71
         # of the energy scale fast, -3.5e-13 dense; campaign scene 8:3): on meshes the

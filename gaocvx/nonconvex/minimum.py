@@ -234,6 +234,16 @@ def fast_eligible(dp, k: int) -> bool:
     return 1 <= k <= 3 and dp.contact != "obstacle"
 
 
+def fast_by_default(dp, k: int) -> bool:
+    """Whether :func:`solve_global` takes the fast path unless told.
+
+    Wherever it serves: faster than the dense programs for one or two modes
+    (measured at 16-32 elements: 2-10 times), slower for three (45 s against
+    23 s at 16 elements), so those use it only beyond the dense programs.
+    """
+    return fast_eligible(dp, k) and (k <= 2 or dp.n_nodes - 1 > MAX_ELEMENTS)
+
+
 def solve_global(dp, modes=None, max_nodes: int = MAX_NODES, fast: bool | None = None) -> tuple:
     """The certified global minimiser of ``dp`` (``P >= P_bar_h``, ``k >= 1`` unstable modes).
 
@@ -272,10 +282,7 @@ def solve_global(dp, modes=None, max_nodes: int = MAX_NODES, fast: bool | None =
     n_el = dp.n_nodes - 1
     modes = modes if modes is not None else unstable_modes(dp)
     if fast is None:
-        # Wherever it serves: faster than the dense programs for one or two modes
-        # (measured at 16-32 elements: 2-10 times), slower for three (45 s against
-        # 23 s at 16 elements), so those use it only beyond the dense programs.
-        fast = fast_eligible(dp, modes.k) and (modes.k <= 2 or n_el > MAX_ELEMENTS)
+        fast = fast_by_default(dp, modes.k)
     if n_el > MAX_ELEMENTS and not fast_eligible(dp, modes.k):
         raise SceneError("mesh.elements", f"the global method's dense node programs take at most "
                          f"{MAX_ELEMENTS} elements (beyond, the fast path: up to three unstable "

@@ -194,7 +194,6 @@ def _check(dp, phi, lam, lam_next, sparse):
     if sparse and dp.p > 0:
         # No eigenvalue below p (1 + MARGIN) missed, and none between it and the
         # computed lambda_{k+1}'s lower half-way point.
-        k = phi.shape[1]
         sigma = dp.p * (1.0 + MARGIN)
         below = count_below(K, dp.G, sigma)
         top = 0.5 * (sigma + lam_next) if math.isfinite(lam_next) else sigma
