@@ -17,14 +17,14 @@ What costs iterations is finding the contact set.  The continuation
 (:func:`continuation`) finds it by raising the penalty tenfold per update
 from the beam's own stiffness (13-22 Newton steps, 30-60 factorisations at
 128-2048 elements).  From 128 elements on, the contact set comes instead from
-the answer on a mesh 16 times coarser (recursively; the coarsest, of 8-127
-elements, by thousandfold penalty jumps, and not certified: it is only a
-start).  Its deflection, evaluated on this mesh, is within the coarse
+the answer on a mesh 16 times coarser, from 8 to 127 elements on one 4 times
+coarser (recursively; the coarsest, of 2-7 elements, by thousandfold penalty
+jumps, and not certified: it is only a start).  Its deflection, evaluated on this mesh, is within the coarse
 discretisation error of the answer, so Newton at the largest penalty, started
 there without multipliers (a stiff foundation), meets only local changes of
 the contact set, and one to three multiplier updates at that penalty end the
 violation.  A warm start (a sweep's previous value, or this answer in another
-scale) is tried at the largest penalty first.  Under 128 elements the
+scale) is tried at the largest penalty first.  Under 8 elements the
 continuation itself solves the scene, as before.
 
 Every multiplier update at the largest penalty is judged by the certificate
@@ -73,9 +73,14 @@ UPDATE_DECREMENT = 1e-4
 # benchmarks/obstacle.py and 4 continuations instead of 7).
 ROUNDS = 2
 # A mesh of N >= COARSE_RATIO * COARSE_MIN elements starts from the answer on
-# N // COARSE_RATIO elements.
+# N // COARSE_RATIO elements; a smaller one of N >= SMALL_RATIO * SMALL_MIN from
+# N // SMALL_RATIO (8 and 32 elements: 13 Newton steps of the continuation, 3
+# factorisations from 2 and 8 elements; the deeper recursion of ratio 4 alone
+# cost 1.7x at 512 elements, measured).
 COARSE_RATIO = 16
 COARSE_MIN = 8
+SMALL_RATIO = 4
+SMALL_MIN = 2
 # Factorisations (on this mesh) before the continuation takes over (24 sent two
 # gaps of the benchmark's sweep at 256 elements and a flat contact at 1024 to
 # it), before a warm start gives way to the coarse start, and the updates at
@@ -97,10 +102,14 @@ MARGIN = {"stationarity": 1e-3, "feasibility": 1e-2, "dual": 1e-3, "complementar
 def coarse_elements(N: int) -> int | None:
     """Elements of the mesh whose answer starts an N-element solve (None: no coarser start).
 
-    >>> coarse_elements(2048), coarse_elements(128), coarse_elements(127)
-    (128, 8, None)
+    >>> coarse_elements(2048), coarse_elements(128), coarse_elements(127), coarse_elements(8)
+    (128, 8, 31, 2)
+    >>> coarse_elements(7) is None
+    True
     """
-    return N // COARSE_RATIO if N >= COARSE_RATIO * COARSE_MIN else None
+    if N >= COARSE_RATIO * COARSE_MIN:
+        return N // COARSE_RATIO
+    return N // SMALL_RATIO if N >= SMALL_RATIO * SMALL_MIN else None
 
 
 def solve_obstacle(mf: MixedForm, z, lam, tol: float, max_iter: int, start_only: bool = False):

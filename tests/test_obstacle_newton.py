@@ -115,14 +115,21 @@ def test_fallback_to_the_continuation(monkeypatch):
     assert np.abs(fast.w - slow.w).max() <= 1e-8 * np.abs(slow.w).max()
 
 
-def test_small_meshes_use_the_continuation(continuation):
-    """Under 128 elements the method is the continuation itself (identical answers)."""
-    scene = Scene.from_dict(scene_dict(**BENCH, elements=64))
-    old = solve(scene, "newton")
-    newton.OBSTACLE_METHOD = "coarse start"
-    new = solve(scene, "newton")
-    assert np.array_equal(new.w, old.w) and new.nit == old.nit
-    assert contact_newton.coarse_elements(64) is None
+def test_small_meshes_start_from_a_mesh_four_times_coarser(continuation):
+    """From 8 to 127 elements the start is the answer on N // 4 elements: at most 8
+    factorisations on the scene's mesh (the continuation: 13 Newton steps), the same
+    answer to the certificate's accuracy; under 8 elements the continuation itself."""
+    for n in (8, 32, 64):
+        scene = Scene.from_dict(scene_dict(**BENCH, elements=n))
+        old = solve(scene, "newton")
+        newton.OBSTACLE_METHOD = "coarse start"
+        new = solve(scene, "newton")
+        newton.OBSTACLE_METHOD = "continuation"
+        assert old.success and new.success and old.nit >= 13
+        assert new.nit <= 8, (n, new.nit, new.message)
+        assert f"from the {n // 4}-element answer" in new.message
+        assert np.abs(new.w - old.w).max() <= 1e-6 * np.abs(old.w).max()
+    assert contact_newton.coarse_elements(7) is None
 
 
 def test_gap_sweep():
