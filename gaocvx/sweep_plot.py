@@ -101,6 +101,27 @@ def sweep_figure(rows: list, key: str, reference: dict | None = None, log: bool 
     return fig
 
 
+def _edges(values: np.ndarray, log: bool) -> np.ndarray:
+    """Cell edges around sorted grid values: midpoints (geometric on a log axis).
+
+    Each value is its cell's centre on the axis as drawn; a single value gets a
+    cell of a tenth of itself (or of 1 at 0) on either side.
+
+    >>> np.round(np.log10(_edges(np.array([1e8, 1e10]), log=True)), 12).tolist()
+    [7.0, 9.0, 11.0]
+    >>> _edges(np.array([0.003]), log=False).tolist()
+    [0.0027, 0.0033]
+    """
+    v = np.asarray(values, float)
+    if len(v) == 1:
+        half = 0.1 * abs(v[0]) or 1.0
+        return np.array([v[0] / 1.1, v[0] * 1.1]) if log else np.array([v[0] - half, v[0] + half])
+    t = np.log(v) if log else v
+    mid = 0.5 * (t[1:] + t[:-1])
+    edges = np.concatenate([[2 * t[0] - mid[0]], mid, [2 * t[-1] - mid[-1]]])
+    return np.exp(edges) if log else edges
+
+
 def save_sweep_map(rows: list, keys, path, log=(False, False), scene=None):
     """Write :func:`sweep_map_figure` to ``path`` (.png or .svg)."""
     path = _check_file(path)
@@ -144,7 +165,7 @@ def sweep_map_figure(rows: list, keys, log=(False, False), scene=None):
         for r in rows:
             if r["status"] == "optimal":
                 z[np.searchsorted(ys, r[ky]), np.searchsorted(xs, r[kx])] = value(r)
-        mesh = ax.pcolormesh(xs, ys, z, shading="nearest")
+        mesh = ax.pcolormesh(_edges(xs, log[0]), _edges(ys, log[1]), z, shading="flat")
         fig.colorbar(mesh, ax=ax)
         if bad:
             bx, by = zip(*bad)

@@ -149,3 +149,24 @@ def test_values_are_solved_on_one_blas_thread(base, monkeypatch, jobs):
     seen = [t for _, t in sweep(base, "foundation.gap", [0.002, 0.004], jobs=jobs,
                                 reduce=_blas_threads)]
     assert seen and all(t == {1} for t in seen), seen
+
+
+def test_map_cells_are_centred_on_their_values_and_one_value_axes_are_drawn():
+    """Found by a new-user trial: on a log axis the cells were centred on the linear
+    midpoints (the first column cut off), and a one-value axis drew no cells at all."""
+    def rows(ks, gs):
+        return [{KEYS[0]: k, KEYS[1]: g, "status": "optimal", "min_w": -g, "max_w": 0.0,
+                 "energy": -k, "contact_length": g} for k in ks for g in gs]
+
+    ks = [1e8, 1e9, 1e10]
+    fig = sweep_map_figure(rows(ks, [0.002, 0.004]), KEYS, log=(True, False))
+    ax = fig.axes[0]
+    x_edges = np.unique(ax.collections[0].get_coordinates()[..., 0])
+    centres = np.sqrt(x_edges[1:] * x_edges[:-1])        # geometric centres of the cells
+    assert centres.tolist() == pytest.approx(ks, rel=1e-9)
+    assert ax.get_xlim()[0] < 1e8 < ax.get_xlim()[1]
+    matplotlib.pyplot.close(fig)
+    fig = sweep_map_figure(rows(ks, [0.003]), KEYS, log=(True, False))
+    cells = fig.axes[0].collections[0].get_array()
+    assert np.ma.count(cells) == 3 and np.all(np.isfinite(np.ma.compressed(cells)))
+    matplotlib.pyplot.close(fig)
