@@ -212,9 +212,16 @@ def _solve_values(scene: Scene, key: str, values, method: str | None):
         try:
             s = scene_at(scene, key, value)
             chosen = choose_method(s, method)
+            if chosen == "global":
+                # At or above P_bar_h (an axial sweep through the limit): the certified
+                # global minimiser, each value on its own (no scale or start carries).
+                yield value, solve(s, "global")
+                continue
             dp = DiscreteProblem(s, W=W)
             W = dp.W if W is None else W
-            result = solve(s, chosen, problem=dp, warm=warm if chosen == "newton" else None,
+            # "auto" stays auto, so that an answer Newton cannot certify gets convex's.
+            asked = "auto" if (method or s.solve.method) == "auto" else chosen
+            result = solve(s, asked, problem=dp, warm=warm if chosen == "newton" else None,
                            reuse=reuse and chosen == "convex")
             warm = result.extra.get("warm")
             yield value, result

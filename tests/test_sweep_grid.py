@@ -170,3 +170,16 @@ def test_map_cells_are_centred_on_their_values_and_one_value_axes_are_drawn():
     cells = fig.axes[0].collections[0].get_array()
     assert np.ma.count(cells) == 3 and np.all(np.isfinite(np.ma.compressed(cells)))
     matplotlib.pyplot.close(fig)
+
+
+def test_an_axial_sweep_goes_through_the_convexity_limit():
+    """Values at or above P_bar_h are solved by the global method, as solve() does (a
+    new-user trial found them refused); below, as before."""
+    scene = Scene.from_dict(scene_dict("P4", foundation=(0.005, 1e10), q=-3e7, elements=12))
+    items = list(sweep(scene, "load.axial", [5e8, 1.5e9]))
+    (_, below), (_, above) = items
+    assert below.status == above.status == "optimal"
+    assert below.method == "newton" and above.method == "global"
+    alone = solve(scene_at(scene, "load.axial", 1.5e9))
+    assert alone.method == "global" and above.energy == pytest.approx(alone.energy, rel=1e-9)
+    assert above.problem.P_bar_h < 1.5e9
