@@ -19,7 +19,7 @@ from conftest import scene_dict
 from independent import BeamProblem, solve_reference
 from nonconvex_independent import first_mode, pencil
 
-from gaocvx import Scene, SceneError, solve
+from gaocvx import DiscreteProblem, Scene, SceneError, solve
 from gaocvx.cli import main
 
 LAMBDA_P4 = None  # set lazily (P_bar_h of the 16-element P4 mesh, independent)
@@ -368,3 +368,18 @@ def test_branch_and_bound_time_limit_ends_uncertified(monkeypatch):
     examples = Path(__file__).parent.parent / "examples"
     r = solve(load_scene(examples / "buckled_pinned.toml"), "global")
     assert r.status == "inaccurate" and "stopped at" in r.message
+
+
+@pytest.mark.parametrize("eps", [1e-9, 1e-10])
+def test_mirror_minimiser_reported_just_above_the_limit(eps):
+    """Without load the mirror image of a buckled minimiser is one too, however close
+    P is to P_bar_h (a new-user trial found unique = true at 1e-9 above it: the leaves
+    around both amplitudes merged into the answer's group)."""
+    data = scene_dict("P4", q=None, elements=16)
+    p_bar = DiscreteProblem(Scene.from_dict(data), check_convexity=False).P_bar_h
+    data["load"]["axial"] = p_bar * (1.0 + eps)
+    r = solve(Scene.from_dict(data), "global")
+    g = r.extra["global"]
+    assert r.status == "optimal" and g["unique"] is False and len(g["alternatives"]) == 1
+    other = np.asarray(g["alternatives"][0]["w"])
+    assert np.abs(other + r.w).max() <= 1e-12 * np.abs(r.w).max()   # its mirror image

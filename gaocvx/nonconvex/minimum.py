@@ -350,6 +350,13 @@ def _run(dp, modes, max_nodes, t0, fast=False):
         else:
             alternatives.append((e2, u2, s2, lam2))
 
+    # The mirror image: near P_bar_h the leaves around +s and -s merge into one group
+    # with the answer's (without load, 1e-9 above the limit, unique was reported).
+    e2 = _feasible_energy(dp, prog)(-best_u)
+    known = [best_u] + [a[1] for a in alternatives]
+    if e2 <= best_e + tol and all(norm(-best_u - x) > DISTINCT * norm(best_u) for x in known):
+        alternatives.append((e2, -best_u, -best_s, None))
+
     mf = MixedForm.on_obstacle(dp) if dp.contact == "obstacle" else MixedForm(dp)
     z = mf.on_manifold(to_mixed(mf, best_u))
     if dp.contact == "obstacle":
