@@ -247,8 +247,10 @@ def _plot_name(name: str, scene_path: str, count: int) -> str:
     return str(p.with_name(f"{p.stem}-{Path(scene_path).stem}{p.suffix}"))
 
 
-def _common(p):
-    p.add_argument("--method", help="auto | convex | newton | cvm (overrides solve.method)")
+def _common(p, method: bool = True):
+    if method:   # equilibria and path have one method (the reduced function's zeros)
+        p.add_argument("--method", help="auto | convex | newton | cvm | global (overrides "
+                       "solve.method)")
     p.add_argument("--elements", type=_count, help="number of elements (overrides mesh.elements)")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a scene value")
     p.add_argument("--json", action="store_true", help="JSON on stdout")
@@ -456,7 +458,7 @@ def _build_parser() -> argparse.ArgumentParser:
     p.add_argument("--output", metavar="FILE", help="write Markdown here instead of stdout")
     p.set_defaults(func=_cmd_report)
     from .nonconvex.cli import add_commands  # equilibria, path (above the convexity limit)
-    add_commands(sub, _common)
+    add_commands(sub, functools.partial(_common, method=False))
     for p in sub.choices.values():  # -v after the subcommand too; counts add up
         p.add_argument("-v", "--verbose", dest="verbose_after", action="count", default=0,
                        help="log phases and progress to stderr (-vv for debug)")

@@ -717,5 +717,7 @@ def check(dp) -> None:
         "load.axial",
         f"P = {dp.P:.4g} N {what} the convexity limit P_bar_h = "
         f"{_to_newtons(dp, enc.value):.4g} N for {beam.supports} "
-        f"(continuum P_bar = {beam.P_bar():.4g} N)",
+        f"(continuum P_bar = {beam.P_bar():.4g} N)"
+        + ("; the global method (method 'global', or 'auto') solves the Gao beam there"
+           if dp.needs_gao else ""),
         dp.P)
