@@ -216,8 +216,9 @@ def _iterate(mf: MixedForm, z, lam, rho, rho_max, budget, start_only=False):
         H = mf.hessian(z)
         residual = nw._obstacle_measures(mf, z, lam, gap, H)
         cheap = _merit(residual)
-        log.debug("obstacle: multiplier update at step %d, merit %.1e (%s)", steps, cheap,
-                  residual)
+        log.log(logging.DEBUG if start_only else logging.INFO,
+                "newton: multiplier update at step %d (penalty %.1e, %d factorisations): "
+                "feasibility %.1e, merit %.1e", steps, rho, total, residual["feasibility"], cheap)
         if cheap <= 1.0 and start_only:
             return z, lam, total, steps, None
         if cheap <= 10.0:  # the stationarity too (two more factorisations)
