@@ -8,8 +8,8 @@ integrates ``(w')^4`` exactly, so by Cauchy-Schwarz the Gao term is at least
 
     Pi(u) >= a/12 t^2 - p/2 t - c0,
 
-and a minimiser has ``Pi <= U`` for any feasible energy ``U`` (0 at w = 0,
-admissible since gaps are >= 0).  That bounds ``t``, and the amplitudes
+and a minimiser has ``Pi <= U`` for any feasible energy ``U`` (that of w = 0,
+admissible since gaps are >= 0: 0, or a bonded bed's 1/2 c g^2 L).  That bounds ``t``, and the amplitudes
 ``s = Phi'G u`` satisfy ``|s|^2 <= t`` (G-orthogonal split).
 
 Without the quartic term (Euler-Bernoulli, or ``E_alpha = 0``) nothing bounds

@@ -304,9 +304,11 @@ def _run(dp, modes, max_nodes, t0, fast=False):
         prog = FastProgram(dp, modes)
     else:
         prog = NodeProgram(dp, modes)
-    # A first upper bound: w = 0 and the one-mode estimate on either side.
+    # A first upper bound: w = 0 and the one-mode estimate on either side.  w = 0 is
+    # admissible (gaps >= 0) but its energy is not always 0: a bonded bed with a gap
+    # stores 1/2 c g^2 L there (taking 0 pruned boxes on a bound no point attains).
     A = one_mode_amplitude(dp, modes)
-    start = (0.0, np.zeros(dp.n), np.zeros(k), None)
+    start = (dp.energy(np.zeros(dp.n)), np.zeros(dp.n), np.zeros(k), None)
     for sign in (1.0, -1.0):
         s = np.zeros(k)
         s[0] = sign * A
