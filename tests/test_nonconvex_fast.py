@@ -190,3 +190,14 @@ def test_two_modes_on_a_fine_mesh_converge_like_h4():
     ref = solve(Scene.from_dict(scene_dict("P1", q=-5e7, axial=1.1e10, elements=16))).energy
     d = np.abs(np.diff([ref] + energies))
     assert np.all(d[1:] <= d[:-1] / 100), d
+
+
+def test_sparse_modes_stop_when_every_computed_mode_is_unstable():
+    """An axial force 1e4 times the limit (units typed wrong): the sparse solve returns
+    at most n - 2 values, and the count doubled for ever (found by a review)."""
+    from gaocvx.nonconvex.modes import unstable_modes
+    limit = DiscreteProblem(Scene.from_dict(scene_dict(elements=4))).P_bar_h
+    dp = DiscreteProblem(Scene.from_dict(scene_dict(elements=4, axial=1e4 * limit)),
+                         check_convexity=False)
+    assert unstable_modes(dp).k == dp.n                       # dense: every mode unstable
+    assert unstable_modes(dp, solver="sparse").k > 3          # enough to refuse; it returns

@@ -47,7 +47,11 @@ import scipy.sparse.linalg as sla
 
 from .modecheck import accurate_ritz, concave_margin, count_below, ritz
 
-__all__ = ["Modes", "unstable_modes", "MARGIN", "MAX_DENSE_DOFS"]
+__all__ = ["Modes", "unstable_modes", "MARGIN", "MAX_DENSE_DOFS", "MAX_UNSTABLE"]
+
+# More unstable modes than this are not resolved further (the global method takes
+# three; equilibria two): the count only has to show that there are too many.
+MAX_UNSTABLE = 8
 
 log = logging.getLogger(__name__)
 
@@ -164,7 +168,10 @@ def unstable_modes(dp, min_k: int = 0, solver: str | None = None) -> Modes:
         vals, vecs = (_pencil_sparse if sparse else _pencil)(dp, count + 1)
         k = int(np.sum(vals <= dp.p * (1.0 + MARGIN))) if dp.p > 0 else 0
         k = max(k, min(min_k, len(vals) - 1))
-        if k < len(vals) or len(vals) == dp.n:
+        # Stop when a stable mode was found, the solver gave all it can (the sparse
+        # one at most n - 2), or there are more unstable modes than anything takes
+        # (the caller refuses beyond three): doubling on never ended on fine meshes.
+        if k < len(vals) or len(vals) < count + 1 or k > MAX_UNSTABLE:
             break
         count *= 2
     if k == 0:
