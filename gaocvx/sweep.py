@@ -215,14 +215,17 @@ def _solve_values(scene: Scene, key: str, values, method: str | None):
             if chosen == "global":
                 # At or above P_bar_h (an axial sweep through the limit): the certified
                 # global minimiser, each value on its own (no scale or start carries).
-                yield value, solve(s, "global")
+                with one_blas_thread():
+                    result = solve(s, "global")
+                yield value, result
                 continue
             dp = DiscreteProblem(s, W=W)
             W = dp.W if W is None else W
             # "auto" stays auto, so that an answer Newton cannot certify gets convex's.
             asked = "auto" if (method or s.solve.method) == "auto" else chosen
-            result = solve(s, asked, problem=dp, warm=warm if chosen == "newton" else None,
-                           reuse=reuse and chosen == "convex")
+            with one_blas_thread():   # per value: the limit must not span a yield
+                result = solve(s, asked, problem=dp, warm=warm if chosen == "newton" else None,
+                               reuse=reuse and chosen == "convex")
             warm = result.extra.get("warm")
             yield value, result
         except (SceneError, SolverError) as exc:
@@ -231,14 +234,12 @@ def _solve_values(scene: Scene, key: str, values, method: str | None):
 
 def _solve_block(scene: Scene, key, values, method: str | None, reduce=None) -> list:
     """A contiguous block of values, for a worker process or a Dask task."""
-    with one_blas_thread():   # two workers on two cores: BLAS threads only contend
-        return [_reduced(reduce, item) for item in _solve_values(scene, key, values, method)]
+    return [_reduced(reduce, item) for item in _solve_values(scene, key, values, method)]
 
 
 def _serial(scene: Scene, key, values, method: str | None, reduce):
-    with one_blas_thread():
-        for item in _solve_values(scene, key, values, method):
-            yield _reduced(reduce, item)
+    for item in _solve_values(scene, key, values, method):
+        yield _reduced(reduce, item)
 
 
 def _reduced(reduce, item):

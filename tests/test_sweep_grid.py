@@ -136,19 +136,40 @@ def test_map_leaves_points_not_certified_blank_and_marks_them():
     matplotlib.pyplot.close(fig)
 
 
-def _blas_threads(value, item):
+def _blas_threads():
     from threadpoolctl import threadpool_info
     return {lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"}
 
 
+def _threads_in_solve(value, item):
+    return item.extra["blas_threads"]
+
+
 @pytest.mark.parametrize("jobs", [1, 2])
 def test_values_are_solved_on_one_blas_thread(base, monkeypatch, jobs):
-    """BLAS threads only contend with the solvers' O(N) work: a sweep runs on one."""
+    """BLAS threads only contend with the solvers' O(N) work: each value is solved on
+    one, and the limit does not outlive the solve (it once spanned the generator's
+    yields, and interleaved sweeps left BLAS on one thread for good; found by a review)."""
+    import gaocvx.sweep as sweep_module
     for variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         monkeypatch.delenv(variable, raising=False)
+    real = sweep_module.solve
+
+    def recording(*args, **kwargs):
+        result = real(*args, **kwargs)
+        result.extra["blas_threads"] = _blas_threads()
+        return result
+
+    monkeypatch.setattr(sweep_module, "solve", recording)   # inherited by forked workers
+    before = _blas_threads()
     seen = [t for _, t in sweep(base, "foundation.gap", [0.002, 0.004], jobs=jobs,
-                                reduce=_blas_threads)]
+                                reduce=_threads_in_solve)]
     assert seen and all(t == {1} for t in seen), seen
+    one, two = (sweep(base, "foundation.gap", [0.002, 0.004]) for _ in range(2))
+    next(one), next(two)
+    assert _blas_threads() == before        # between values: the user's own setting
+    list(one), list(two)
+    assert _blas_threads() == before
 
 
 def test_map_cells_are_centred_on_their_values_and_one_value_axes_are_drawn():
