@@ -15,7 +15,7 @@ Differentiating the slice's optimality conditions gives its Hessian too,
 function ``G(s) = F(s) + sum c_i s_i^2 + chord(s)`` (k <= 3 variables), found
 by projected Newton with that Hessian, and ``G(s0) + min_box G'(s0)(s - s0)``
 is a lower bound by convexity at whatever point ``s0`` it stops.  Obstacles
-are handled by :mod:`.fastobstacle`.
+are not handled here (the dense programs of :mod:`.node` are).
 
 Examples
 --------
@@ -110,18 +110,24 @@ class FastProgram:
             # damped Newton on the slice: the energy is convex there
             t, e0 = 1.0, sum(mf.energy_parts(z).values())
             slope = float(g @ d)
+            descended = False
             while t > 1e-10:
                 e1 = sum(mf.energy_parts(z + t * d).values())
                 if e1 <= e0 + 1e-4 * t * slope or abs(dec) < 1e-20 * max(abs(e0), 1.0):
+                    descended = True
                     break
                 t *= 0.5
             z = z + t * d
             # Converged at round-off: a decrement (squared energy-norm step) below
             # 1e-16 of the energy that no longer falls quadratically, or a step
-            # below round-off (the decrement's round-off floor grows with N).
+            # below round-off (the decrement's round-off floor grows with N) that
+            # the line search took, or took at a round-off decrement: a search cut
+            # to t = 1e-10 without descent made any step look converged, and its
+            # slice fed a node's lower bound (found by a review).
             small = abs(dec) <= 1e-16 * max(abs(e0), 1e-300)
+            tiny_step = np.linalg.norm(t * d) <= 1e-15 * max(np.linalg.norm(z), 1e-300)
             if (small and (abs(dec) > 0.01 * previous or abs(dec) <= 1e-26 * abs(e0))) or \
-                    np.linalg.norm(t * d) <= 1e-15 * max(np.linalg.norm(z), 1e-300):
+                    (tiny_step and (descended or small)):
                 ok = True
                 break
             previous = abs(dec)
