@@ -331,9 +331,10 @@ def _cmd_sweep(args) -> int:
         keys = None
     else:  # a grid: every combination, the first key outermost
         keys = key = tuple(k for k, _, _ in axes)
+        points = math.prod(len(v) for _, _, v in axes)
+        if points > 1_000_000:   # before the grid is built (two axes of 1e5 are 1e10 points)
+            raise SceneError("--vary", "a grid of at most 10^6 points", points)
         values = grid(*(v for _, _, v in axes))
-        if len(values) > 1_000_000:
-            raise SceneError("--vary", "a grid of at most 10^6 points", len(values))
         if args.plot and len(axes) != 2:
             raise SceneError("--plot", "a map needs exactly two --vary keys", list(keys))
     if args.jobs < 1:

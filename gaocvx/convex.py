@@ -34,6 +34,7 @@ is called optimal.
 from __future__ import annotations
 
 import logging
+import math
 import time
 import warnings
 
@@ -219,7 +220,8 @@ class ConvexProgram:
 
 def _badness(residual: dict) -> float:
     """How far a certificate is from passing: its largest measure over its tolerance."""
-    return max(residual[k] / tol for k, tol in TOLERANCES.items() if k in residual)
+    ratios = [residual[k] / tol for k, tol in TOLERANCES.items() if k in residual]
+    return math.inf if any(math.isnan(r) for r in ratios) else max(ratios)
 
 
 def _level(mf: MixedForm) -> float:

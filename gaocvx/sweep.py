@@ -151,11 +151,11 @@ def scene_at(scene: Scene, key, value) -> Scene:
     ``key`` may be a sequence of keys and ``value`` the sequence of their values.
     """
     if not isinstance(key, str):
-        if LOAD_SCALE not in key:   # one validation for all keys
-            return scene.with_overrides(dict(zip(key, value, strict=True)))
-        for k, v in zip(key, value, strict=True):   # the scale applies to the loads set so far
-            scene = scene_at(scene, k, v)
-        return scene
+        pairs = dict(zip(key, value, strict=True))
+        scale = pairs.pop(LOAD_SCALE, None)
+        scene = scene.with_overrides(pairs) if pairs else scene   # one validation for all
+        # the scale applies to the loads the other keys set, whatever the keys' order
+        return scene if scale is None else scene_at(scene, LOAD_SCALE, scale)
     if key == LOAD_SCALE:
         load = scene.load
         q = load.q
@@ -289,6 +289,8 @@ def sweep(scene: Scene, key, values, method: str | None = None, jobs: int = 1,
     on one thread while values are solved (:func:`gaocvx.linalg.one_blas_thread`).
     """
     values = np.asarray(values, float)
+    if not (isinstance(jobs, (int, np.integer)) and jobs >= 1):
+        raise SceneError("--jobs", "must be a whole number of at least 1", jobs)
     if isinstance(key, str):
         _check_key(scene, key)
         if values.ndim != 1:
@@ -321,11 +323,14 @@ def sweep(scene: Scene, key, values, method: str | None = None, jobs: int = 1,
 
 def _process_map(jobs, scene, key, blocks, method, reduce):
     from concurrent.futures import ProcessPoolExecutor
-    with ProcessPoolExecutor(max_workers=jobs) as pool:
+    pool = ProcessPoolExecutor(max_workers=jobs)
+    try:
         futures = [pool.submit(_solve_block, scene, key, block, method, reduce)
                    for block in blocks]
         for f in futures:  # in order
             yield f.result()
+    finally:   # a caller that stops early (or fails) does not wait for the other blocks
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _dask_map(address, scene, key, blocks, method, reduce):

@@ -19,6 +19,8 @@ Examples
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from .plot import UNITS, _check_file, _pyplot, _write

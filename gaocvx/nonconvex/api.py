@@ -128,5 +128,6 @@ def solve_global_result(scene, elements=None, problem=None, solver=None):
     info["alternatives"] = alternatives
     if alternatives:
         raw["message"] += (f"; not unique: {len(alternatives) + 1} minimisers within the "
-                           "certified gap (mirror images), all in extra['global']['alternatives']")
+                           "certified gap (mirror images or other contact states), all in "
+                           "extra['global']['alternatives']")
     return make_result(dp, raw, "global", time.perf_counter() - t0, extra={"global": info})

@@ -129,7 +129,7 @@ def _convex_equilibrium(scene, elements, dp) -> list:
 
 def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                fast: bool | None = None) -> list:
-    """Every equilibrium of ``scene`` (k <= 1 unstable modes), sorted by energy.
+    """Every equilibrium of ``scene`` (k <= 2 unstable modes), sorted by energy.
 
     Parameters
     ----------
