@@ -166,8 +166,13 @@ def _justified(case, message, k) -> bool:
 
 
 def _distinct(en, x, y) -> bool:
+    """x and y differ by more than 1e-3 of the larger (in the G norm), or of 1e-6 of the
+    unsupported linear answer: two answers pressed flat at w = 0 (1e-32 and 0) are one."""
     d = x - y
-    nx = math.sqrt(max(float(x @ en.G @ x), float(y @ en.G @ y), 1e-300))
+    _, g0 = en(np.zeros_like(x))
+    lin = np.linalg.solve(en.stiffness(), g0)
+    floor = 1e-6 * math.sqrt(max(float(lin @ en.G @ lin), 0.0))
+    nx = math.sqrt(max(float(x @ en.G @ x), float(y @ en.G @ y), floor**2, 1e-300))
     return math.sqrt(max(float(d @ en.G @ d), 0.0)) > 1e-3 * nx
 
 

@@ -217,7 +217,8 @@ class Discrete:
     def kkt(self, x) -> dict:
         """Optimality measures of x as a local minimiser (relative, in the K metric).
 
-        ``stationarity``: ``||g - R_T' lam||_{K^-1} / ||x||_K`` with multipliers
+        ``stationarity``: ``||g - R_T' lam||_{K^-1} / ||x||_K`` (``||x||_K`` at least
+        1e-6 of the unsupported linear answer's) with multipliers
         ``lam >= 0`` of the touching rows (slack <= 1e-9 of max |x|, 1) from a
         non-negative least-squares fit; ``feasibility``: the largest violation
         relative to max(|x|, 1); ``lowest``: the smallest eigenvalue of the
@@ -240,6 +241,12 @@ class Discrete:
             lam[touch] = lam_t
             y = y - M @ lam_t
         norm_x = math.sqrt(max(float(x @ self.stiffness() @ x), 1e-300))
+        # An answer pressed flat onto an obstacle is w = 0 to round-off: relative to its
+        # own norm (1e-32) any residual is huge.  Floor: 1e-6 of the unsupported linear
+        # answer's norm, ||K^-1 g(0)||_K (the floor the package documents for such answers).
+        _, g0 = self(np.zeros_like(x))
+        floor = 1e-6 * float(np.linalg.norm(sla.solve_triangular(Kc, g0, lower=True)))
+        norm_x = max(norm_x, floor)
         H = self.hessian(x)
         strong = np.flatnonzero(lam > 1e-6 * max(float(np.max(lam, initial=0.0)), 1e-300))
         Z = sla.null_space(R[strong]) if len(strong) else np.eye(self.n)
