@@ -18,7 +18,13 @@ from . import fem
 from .errors import format_value
 from .scene import Scene
 
-__all__ = ["Result", "contact_zones"]
+__all__ = ["Result", "contact_zones", "extremum"]
+
+
+def extremum(x, w, largest: bool) -> dict:
+    """The largest (or smallest) nodal deflection and its node, the first on ties."""
+    i = int(np.argmax(w) if largest else np.argmin(w))
+    return {"w": float(w[i]), "x": float(x[i])}
 
 log = logging.getLogger(__name__)
 
@@ -140,14 +146,12 @@ class Result:
     @property
     def max(self) -> dict:
         """Largest nodal deflection and its node (the first on ties)."""
-        i = int(np.argmax(self.w))
-        return {"w": float(self.w[i]), "x": float(self.x[i])}
+        return extremum(self.x, self.w, largest=True)
 
     @property
     def min(self) -> dict:
         """Smallest nodal deflection and its node (the first on ties)."""
-        i = int(np.argmin(self.w))
-        return {"w": float(self.w[i]), "x": float(self.x[i])}
+        return extremum(self.x, self.w, largest=False)
 
     # ------------------------------------------------------------- evaluators
     def _dofs(self) -> np.ndarray:

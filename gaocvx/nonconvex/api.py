@@ -20,10 +20,9 @@ from __future__ import annotations
 import logging
 import time
 
-import numpy as np
-
 from ..discrete import DiscreteProblem
 from ..errors import SceneError
+from ..result import extremum
 
 __all__ = ["above_limit", "provably_convex", "solve_global_result"]
 
@@ -65,10 +64,8 @@ def _statement(dp) -> str:
 
 def _physical(dp, u) -> dict:
     w, slope = dp.to_physical(u)
-    i, j = int(np.argmin(w)), int(np.argmax(w))
     return {"w": w.tolist(), "slope": slope.tolist(),
-            "min": {"w": float(w[i]), "x": float(dp.x[i])},
-            "max": {"w": float(w[j]), "x": float(dp.x[j])}}
+            "min": extremum(dp.x, w, largest=False), "max": extremum(dp.x, w, largest=True)}
 
 
 def solve_global_result(scene, elements=None, problem=None, solver=None):

@@ -43,6 +43,7 @@ import scipy.optimize as so
 
 from ..discrete import DiscreteProblem
 from ..errors import SceneError
+from ..result import extremum
 from .bounds import check_bounded, equilibrium_box
 
 __all__ = ["Equilibrium", "equilibria", "GRID"]
@@ -99,13 +100,11 @@ class Equilibrium:
 
     @property
     def min(self) -> dict:
-        i = int(np.argmin(self.w))
-        return {"w": float(self.w[i]), "x": float(self.x[i])}
+        return extremum(self.x, self.w, largest=False)
 
     @property
     def max(self) -> dict:
-        i = int(np.argmax(self.w))
-        return {"w": float(self.w[i]), "x": float(self.x[i])}
+        return extremum(self.x, self.w, largest=True)
 
     def deflection_at(self, x: float) -> float:
         """Nodal-interpolated deflection at ``x`` [m] (linear between nodes)."""
