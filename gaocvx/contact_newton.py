@@ -240,8 +240,8 @@ def _iterate(mf: MixedForm, z, lam, rho, rho_max, budget, start_only=False):
 
 def _merit(residual: dict) -> float:
     """The largest measure of ``residual`` over its stopping margin (<= 1: done)."""
-    from .newton import TOLERANCES
-    return max(residual[k] / (MARGIN[k] * TOLERANCES[k]) for k in residual)
+    from .newton import shortfall
+    return shortfall(residual, MARGIN)
 
 
 def continuation(mf: MixedForm, z, lam, tol, max_iter):
@@ -273,7 +273,7 @@ def continuation(mf: MixedForm, z, lam, tol, max_iter):
         merit = math.inf
         if nw.passes({"stationarity": 0.0, **residual}):
             residual = {"stationarity": nw._stationarity(mf, z, lam, H), **residual}
-            merit = max(residual[k] / (nw.MARGIN[k] * nw.TOLERANCES[k]) for k in nw.TOLERANCES)
+            merit = nw.shortfall(residual, nw.MARGIN)
             if best is None or merit < best[0]:
                 # Progress is a halving of the merit: on a long flat contact the
                 # multipliers converge by a few per cent per update at the largest

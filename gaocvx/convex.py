@@ -34,7 +34,6 @@ is called optimal.
 from __future__ import annotations
 
 import logging
-import math
 import time
 import warnings
 
@@ -46,7 +45,7 @@ from .errors import SceneError, SolverError
 from .linalg import BandedCholesky, NotPositiveDefinite
 from .cache import LRU
 from .mixed import MixedForm, structure_key
-from .newton import TOLERANCES, answer, certify, passes
+from .newton import answer, certify, passes, shortfall
 
 __all__ = ["solve_convex", "ConvexProgram"]
 
@@ -218,12 +217,6 @@ class ConvexProgram:
         return True
 
 
-def _badness(residual: dict) -> float:
-    """How far a certificate is from passing: its largest measure over its tolerance."""
-    ratios = [residual[k] / tol for k, tol in TOLERANCES.items() if k in residual]
-    return math.inf if any(math.isnan(r) for r in ratios) else max(ratios)
-
-
 def _level(mf: MixedForm) -> float:
     """The contact level for the program: g, or a level the answer provably cannot reach.
 
@@ -389,7 +382,7 @@ def solve_convex(dp: DiscreteProblem, solver: str = "clarabel", verbose: bool = 
         # A later rung is not always better (at 8192 elements on an obstacle the
         # last, Clarabel's defaults, left stationarity 0.92 where the first left
         # 7e-5): the answer is the attempt nearest to passing.
-        if best is None or _badness(attempt[3]) < _badness(best[3]):
+        if best is None or shortfall(attempt[3]) < shortfall(best[3]):
             best = attempt
         if passes(best[3]):
             break

@@ -459,6 +459,17 @@ def _obstacle_measures(mf: MixedForm, z, lam, gap, H) -> dict:
             "complementarity": complementarity(lam, gap, mf.scale(z, H), size)}
 
 
+def shortfall(residual: dict, margin: dict | None = None) -> float:
+    """The largest measure of ``residual`` over its tolerance (times ``margin``'s fraction).
+
+    At most 1: within the tolerances (or margins).  A NaN measure counts as
+    infinitely far (``max`` with a NaN depends on the order).
+    """
+    ratios = [residual[k] / (TOLERANCES[k] * (margin[k] if margin else 1.0))
+              for k in TOLERANCES if k in residual]
+    return math.inf if any(math.isnan(r) for r in ratios) else max(ratios)
+
+
 def passes(residual: dict) -> bool:
     """The certificate: every measure within its tolerance."""
     ok = residual["stationarity"] <= STATIONARITY_TOL
