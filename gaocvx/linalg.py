@@ -9,6 +9,8 @@ cheapest proof that a matrix is not positive definite.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
@@ -48,18 +50,14 @@ def one_blas_thread():
     return controller.limit(limits=1, user_api="blas")
 
 
-_CONTROLLER = []
-
-
+@functools.lru_cache(maxsize=1)
 def _controller():
     """threadpoolctl's view of the loaded libraries, made once (4 ms; a limit then 13 us)."""
-    if not _CONTROLLER:
-        try:
-            from threadpoolctl import ThreadpoolController
-            _CONTROLLER.append(ThreadpoolController())
-        except ImportError:  # pragma: no cover
-            _CONTROLLER.append(None)
-    return _CONTROLLER[0]
+    try:
+        from threadpoolctl import ThreadpoolController
+    except ImportError:  # pragma: no cover
+        return None
+    return ThreadpoolController()
 
 
 class NotPositiveDefinite(np.linalg.LinAlgError):

@@ -212,21 +212,20 @@ def _solve_values(scene: Scene, key: str, values, method: str | None):
         try:
             s = scene_at(scene, key, value)
             chosen = choose_method(s, method)
-            if chosen == "global":
-                # At or above P_bar_h (an axial sweep through the limit): the certified
-                # global minimiser, each value on its own (no scale or start carries).
-                with one_blas_thread():
-                    result = solve(s, "global")
-                yield value, result
-                continue
-            dp = DiscreteProblem(s, W=W)
-            W = dp.W if W is None else W
-            # "auto" stays auto, so that an answer Newton cannot certify gets convex's.
-            asked = "auto" if (method or s.solve.method) == "auto" else chosen
             with one_blas_thread():   # per value: the limit must not span a yield
-                result = solve(s, asked, problem=dp, warm=warm if chosen == "newton" else None,
-                               reuse=reuse and chosen == "convex")
-            warm = result.extra.get("warm")
+                if chosen == "global":
+                    # At or above P_bar_h (an axial sweep through the limit): the certified
+                    # global minimiser, each value on its own (no scale or start carries).
+                    result = solve(s, "global")
+                else:
+                    dp = DiscreteProblem(s, W=W)
+                    W = dp.W if W is None else W
+                    # "auto" stays auto: an answer Newton cannot certify gets convex's.
+                    asked = "auto" if (method or s.solve.method) == "auto" else chosen
+                    result = solve(s, asked, problem=dp,
+                                   warm=warm if chosen == "newton" else None,
+                                   reuse=reuse and chosen == "convex")
+                    warm = result.extra.get("warm")
             yield value, result
         except (SceneError, SolverError) as exc:
             yield value, exc
