@@ -19,11 +19,11 @@ from the beam's own stiffness (13-22 Newton steps, 30-60 factorisations at
 128-2048 elements).  From 128 elements on, the contact set comes instead from
 the answer on a mesh 16 times coarser, from 8 to 127 elements on one 4 times
 coarser (recursively; the coarsest, of 2-7 elements, by thousandfold penalty
-jumps, and not certified: it is only a start).  Its deflection, evaluated on this mesh, is within the coarse
-discretisation error of the answer, so Newton at the largest penalty, started
-there without multipliers (a stiff foundation), meets only local changes of
-the contact set, and one to three multiplier updates at that penalty end the
-violation.  A warm start (a sweep's previous value, or this answer in another
+jumps, and not certified: it is only a start).  Its deflection, evaluated on
+this mesh, is within the coarse discretisation error of the answer, so Newton
+at the largest penalty, started there without multipliers (a stiff
+foundation), meets only local changes of the contact set, and one to three
+multiplier updates at that penalty end the violation.  A warm start (a sweep's previous value, or this answer in another
 scale) is tried at the largest penalty first.  Under 8 elements the
 continuation itself solves the scene, as before.
 
@@ -131,10 +131,10 @@ def solve_obstacle(mf: MixedForm, z, lam, tol: float, max_iter: int, start_only:
     coarse, note = 0, ""
     n_c = coarse_elements(mf.dp.n_nodes - 1)
     if n_c is None and not start_only:
-        # A mesh under COARSE_RATIO * COARSE_MIN elements: the continuation itself
-        # (as before; started cold by thousandfold jumps, or warm at the largest
-        # penalty, it fell back to it for 34 and 18 of 150 random scenes of
-        # tests/campaign.py, and saved no time).
+        # A mesh under SMALL_RATIO * SMALL_MIN elements: the continuation itself
+        # (started cold by thousandfold jumps, or warm at the largest penalty, with
+        # no coarser start such meshes fell back to it for 34 and 18 of 150 random
+        # scenes of tests/campaign.py, and saved no time).
         return continuation(mf, z, lam, tol, max_iter)
     warm_nf = 0
     if np.any(lam) and not start_only:
