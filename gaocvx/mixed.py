@@ -495,8 +495,8 @@ class MixedForm:
         depths, gaps), so those of z and d are computed once and each trial
         step costs a few O(N) vector operations instead of six sparse products
         (a 256-element sweep value made 16 gradient calls, mostly here).  The
-        same sums as :meth:`gradient`, in the same order: agreement to
-        round-off is tested.
+        same terms as :meth:`gradient` (the images of z + t d formed as
+        image(z) + t image(d)): agreement to round-off is tested.
         """
         dp = self.dp
         c0, cd = self.curvatures(z), self.B2 @ d
