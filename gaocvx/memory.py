@@ -50,8 +50,10 @@ def estimate_memory(elements: int, method: str = "auto", contact: str | None = N
     elements : int
         Number of elements (including nodes inserted at point forces).
     method : str
-        ``"auto"`` and any method other than ``"convex"`` and ``"cvm"`` are
-        estimated as Newton (what ``auto`` chooses).
+        ``"global"`` is estimated as ``"convex"`` (below the convexity limit it
+        is the convex program; above it, its meshes are capped far below where
+        memory matters); ``"auto"`` and any other method as Newton (what
+        ``auto`` chooses below the limit).
     contact : {None, "foundation", "obstacle"}
 
     Returns
@@ -60,7 +62,7 @@ def estimate_memory(elements: int, method: str = "auto", contact: str | None = N
         Bytes above the imported package.
     """
     n = float(elements)
-    table = _PER_ELEMENT.get(method, _PER_ELEMENT["newton"])
+    table = _PER_ELEMENT.get("convex" if method == "global" else method, _PER_ELEMENT["newton"])
     per = table.get(contact, max(table.values()))
     total = _BASE + per * n
     return total

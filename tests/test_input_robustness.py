@@ -344,6 +344,13 @@ def test_memory_estimate_and_refusal(monkeypatch, capsys, scene_file):
     one_error_line(err, "error: mesh.elements: ")
     fit = limits.max_elements_that_fit("newton", "foundation", 2e8)
     assert est(fit, "newton", "foundation") <= 2e8 < est(fit + 1, "newton", "foundation")
+    # the global method below the limit is the convex program: estimated as one (a
+    # property test ran it on 1e6 elements to 16 GB and std::bad_alloc)
+    assert est(2000, "global", "obstacle") == est(2000, "convex", "obstacle")
+    code, out, err = run(capsys, "solve", scene_file, "--elements", "1000000",
+                         "--method", "global")
+    assert code == 2 and out == ""
+    one_error_line(err, "error: mesh.elements: ")
 
 
 # ------------------------------------------------------------------ batches
