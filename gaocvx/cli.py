@@ -190,13 +190,13 @@ def _unexpected(exc: BaseException) -> str:
 
 
 def _cmd_verify(args) -> int:
-    from .scene import _number, load_scene
+    from .scene import load_scene, number
     from .verify import check_reference_elements, read_result_csv, verify
 
     scene = load_scene(args.scene, _overrides(args))
     elements = check_reference_elements(scene, args.reference_elements, "--reference-elements")
-    max_gap = None if args.max_gap is None else _number("--max-gap", args.max_gap, lo=0)
-    max_error = None if args.max_error is None else _number("--max-error", args.max_error, lo=0)
+    max_gap = None if args.max_gap is None else number("--max-gap", args.max_gap, lo=0)
+    max_error = None if args.max_error is None else number("--max-error", args.max_error, lo=0)
     x, w, slope = read_result_csv(args.result)
     report = verify(scene, x, w, slope, reference_elements=elements, key=args.result,
                     max_gap=max_gap, max_error=max_error)

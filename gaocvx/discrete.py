@@ -168,7 +168,7 @@ class DiscreteProblem:
         One banded factorisation proves P < P_bar_h when P is clear of the limit
         by more than its round-off margin; nearer, the enclosure of P_bar_h
         decides, and a P inside it is refused (:mod:`gaocvx.limit`).  A bonded
-        foundation raises the limit to P_hat_h (:mod:`gaocvx.foundation_limit`).
+        foundation raises the limit to P_hat_h (:mod:`gaocvx.limit.bonded`).
         """
         if not self.P > 0:
             return
@@ -178,7 +178,7 @@ class DiscreteProblem:
         except SceneError:
             if not self.bilateral:
                 raise
-            from .foundation_limit import BondedLimit
+            from .limit.bonded import BondedLimit
             # With a stiffness profile, each element's smallest value at its
             # quadrature points bounds its foundation term from below.
             c = self.c if np.ndim(self.c) == 0 else \
@@ -432,11 +432,11 @@ class DiscreteProblem:
         """A bonded foundation's convexity limit [N] (thesis (2.44)); None for other scenes.
 
         The smallest eigenvalue of (K + c M, mu G), >= P_bar_h: see
-        :mod:`gaocvx.foundation_limit`.
+        :mod:`gaocvx.limit.bonded`.
         """
         if not self.bilateral:
             return None
-        from .foundation_limit import p_hat_h
+        from .limit.bonded import p_hat_h
         return p_hat_h(self)
 
     @functools.cached_property

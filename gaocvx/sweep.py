@@ -189,7 +189,7 @@ def _check_key(scene: Scene, key: str) -> None:
     """Fail fast on a key no value could make valid."""
     if key == LOAD_SCALE:
         return
-    from .scene import _PARTS
+    from .scene.parts import _PARTS
     section, _, name = key.partition(".")
     if section not in _PARTS or name not in _PARTS[section].KEYS:
         raise SceneError(key, "unknown scene key (use section.name, e.g. foundation.stiffness, "

@@ -35,7 +35,7 @@ import numpy as np
 from . import fem
 from .discrete import DiscreteProblem
 from .errors import SceneError
-from .scene import MAX_ELEMENTS, Scene, _number, _whole, read_text
+from .scene import MAX_ELEMENTS, Scene, number, read_text, whole
 from .solve import solve
 
 __all__ = ["verify", "read_result_csv", "reference_method", "check_reference_elements",
@@ -135,7 +135,7 @@ def check_reference_elements(scene: Scene, elements, key: str = "reference_eleme
     if upper < 1:
         raise SceneError(key, f"no ground-truth mesh fits{why}", elements)
     try:
-        return _whole(key, elements, 1, upper)
+        return whole(key, elements, 1, upper)
     except SceneError:
         raise SceneError(key, f"must be a whole number from 1 to {upper}{why}",
                          elements) from None
@@ -217,7 +217,7 @@ def verify(scene: Scene, x, w, slope=None, *, reference_elements: int = REFERENC
     """
     if isinstance(scene, dict):
         scene = Scene.from_dict(scene)
-    limits = {name: None if value is None else _number(name, value, lo=0)
+    limits = {name: None if value is None else number(name, value, lo=0)
               for name, value in (("max_gap", max_gap), ("max_error", max_error))}
     reference_elements = check_reference_elements(scene, reference_elements)
     x = _column(f"{key}: x", x)

@@ -99,8 +99,8 @@ def test_result_csv_with_bom_is_read(tmp_path):
 
 def test_oversized_or_endless_file_is_refused(monkeypatch, tmp_path):
     """``gaocvx solve /dev/zero`` read forever."""
-    import gaocvx.scene
-    monkeypatch.setattr(gaocvx.scene, "MAX_FILE_BYTES", 100)
+    import gaocvx.scene.files
+    monkeypatch.setattr(gaocvx.scene.files, "MAX_FILE_BYTES", 100)
     path = tmp_path / "big.toml"
     path.write_text(FOUNDATION_TOML)
     with pytest.raises(SceneError, match="larger than"):

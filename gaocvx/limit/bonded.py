@@ -43,7 +43,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .limit import _GAMMA, _U, BETA, EPS, ConvexityLimit, _identity_rows
+from .element import _GAMMA, _U, BETA, EPS, identity_rows as _identity_rows
+from .pencil import ConvexityLimit
 
 __all__ = ["BondedLimit", "p_hat_h"]
 
