@@ -45,7 +45,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Leaf", "BnBResult", "branch_and_bound", "components"]
+__all__ = ["Leaf", "BnBResult", "branch_and_bound", "components", "rescaled_leaves"]
 
 log = logging.getLogger(__name__)
 
@@ -93,7 +93,7 @@ class BnBResult:
 
 
 def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
-                     start=None) -> BnBResult:
+                     start=None, leaves=None) -> BnBResult:
     """Minimise the energy over the box ``[lo, hi]`` of amplitudes, to a certified gap ``tol``.
 
     Parameters
@@ -111,6 +111,12 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
         Node programs at most (the result then has ``converged = False``).
     start : tuple, optional
         ``(energy, u, s, lam)`` of a known feasible point (an upper bound).
+    leaves : list of Leaf, optional
+        The final leaves of an earlier search of the same problem (measured in
+        this one's units, see :func:`rescaled_leaves`), which tile ``[lo, hi]``:
+        their bounds hold here too, so the search goes on from them instead of
+        from the whole box.  Those whose bound is within reach of the best energy
+        are solved again (their bound is kept if higher).
     """
     c = np.asarray(prog.modes.c, float)
     # A wall-clock limit: with constraints each node is a solve of its own, and a
@@ -137,10 +143,24 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
         # (and is split further if it matters).
         return Leaf(parent.lower, lo, hi, sol.s, sol.u, parent.ok)
 
-    root = evaluate(np.asarray(lo, float), np.asarray(hi, float),
-                    Leaf(-math.inf, None, None, None, None, False))
-    open_ = [(root.lower, next(counter), root)]
     closed = []
+    if leaves is None:
+        root = evaluate(np.asarray(lo, float), np.asarray(hi, float),
+                        Leaf(-math.inf, None, None, None, None, False))
+        open_ = [(root.lower, next(counter), root)]
+    else:
+        # Why go on from an earlier search: re-solved in the answer's own scale, far
+        # boxes (amplitudes hundreds of times the answer's) have values ~1e7 times
+        # it, where Clarabel stops with "insufficient progress"; their bounds from
+        # the first scale, where they were solved, are as valid in this one.
+        open_ = []
+        for old in leaves:
+            leaf = evaluate(old.lo, old.hi, old) if old.lower <= best[0] else old
+            if leaf.lower > best[0] - tol:
+                closed.append(leaf)
+            else:
+                open_.append((leaf.lower, next(counter), leaf))
+        heapq.heapify(open_)
     converged = True
     while open_:
         lower, _, leaf = open_[0]
@@ -177,6 +197,26 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
              lower, len(leaves))
     return BnBResult(best[0], lower, best[1], best[2], best[3], nodes, leaves,
                      converged, failed)
+
+
+def rescaled_leaves(leaves, ratio: float) -> list:
+    """``leaves`` measured in a deflection scale ``ratio`` times smaller (W_old / W_new).
+
+    Amplitudes and DOFs are lengths over W, so they grow by ``ratio``; energies
+    are over ``E0 ~ W^2``, so bounds grow by ``ratio**2``.  The change of units
+    is exact: a bound that held before holds after.
+
+    Examples
+    --------
+    >>> leaf = Leaf(-1.0, np.array([0.0]), np.array([1.0]), None, None, True, 0.5)
+    >>> new = rescaled_leaves([leaf], 2.0)[0]
+    >>> new.lower, new.hi, new.noise
+    (-4.0, array([2.]), 2.0)
+    """
+    r, r2 = float(ratio), float(ratio) ** 2
+    return [Leaf(leaf.lower * r2, leaf.lo * r, leaf.hi * r,
+                 None if leaf.s is None else leaf.s * r, None if leaf.u is None else leaf.u * r,
+                 leaf.ok, leaf.noise * r2) for leaf in leaves]
 
 
 def components(leaves) -> list:

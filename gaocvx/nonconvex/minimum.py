@@ -288,16 +288,22 @@ def solve_global(dp, modes=None, max_nodes: int = MAX_NODES, fast: bool | None =
                          f"{MAX_ELEMENTS} elements (beyond, the fast path: up to three unstable "
                          "modes, without an obstacle)", n_el)
     dp = rescale_for(dp, modes)
+    prior = None
     for attempt in range(2):
-        raw, info, size = _run(dp, modes, max_nodes, t0, fast)
+        raw, info, size, out = _run(dp, modes, max_nodes, t0, fast, prior)
         if attempt or 0.1 <= size <= 10.0 or not math.isfinite(size) or size == 0:
             break
         log.info("global: re-solving in the answer's own scale (size %.3g W)", size)
         dp = dp.rescaled(dp.W * size)
+        # The search goes on from the first one's leaves (in the new units: lengths
+        # over W grow by 1/size, energies by 1/size^2, multipliers by 1/size).
+        r = 1.0 / size
+        prior = (bnb.rescaled_leaves(out.leaves, r), out.u * r, out.s * r,
+                 None if out.lam is None else out.lam * r)
     return dp, raw, info
 
 
-def _run(dp, modes, max_nodes, t0, fast=False):
+def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     k = modes.k
     if fast:
         from .fast import FastProgram
@@ -315,6 +321,10 @@ def _run(dp, modes, max_nodes, t0, fast=False):
         F, _, u, ok = prog.reduced(s)
         if u is not None and dp.energy(u) < start[0]:
             start = (dp.energy(u), u, s, prog.obstacle_multipliers())
+    if prior is not None:
+        e = _feasible_energy(dp, prog)(prior[1])
+        if e < start[0]:
+            start = (e, prior[1], prior[2], prior[3])
     # lambda_1 of (K, G) bounds u'K u / t; with a bonded foundation the modes are
     # those of (K + c M, G), whose lambda_1 is no bound of it: none is used then.
     lam1 = 0.0 if getattr(dp, "bilateral", False) else float(modes.lam[0]) * (1.0 - 1e-9)
@@ -322,7 +332,7 @@ def _run(dp, modes, max_nodes, t0, fast=False):
     floor = ENERGY_FLOOR * scene_energy(dp, modes)
     scale = max(sum(abs(v) for v in dp.energy_parts(start[1]).values()), floor, 1e-300)
     out = branch_and_bound(prog, _feasible_energy(dp, prog), lo, hi, GAP_TARGET * scale,
-                           max_nodes, start)
+                           max_nodes, start, leaves=None if prior is None else prior[0])
     if out.s is None:
         out.s = start[2]
     best_s, best_u, lam = _polish(dp, prog, out.s, out.u, out.lam, lo, hi)
@@ -402,4 +412,4 @@ def _run(dp, modes, max_nodes, t0, fast=False):
     size = mf.deflection_size(z)
     if mf.has_load and size <= mf.zero_floor:
         size = 1.0  # zero to round-off (lying flat on an obstacle): no scale of its own
-    return raw, info, size
+    return raw, info, size, out
