@@ -12,8 +12,9 @@ by sparse linear constraints) and contains only the terms a scene needs:
 * the Gao term ``a/12 Σ w_q s_q^4`` with slopes at 5 Gauss points, as
   ``a sigma^4/12 Σ w_q u_q^2`` with ``u_q >= (s_q/sigma)^2`` (one rotated
   second-order cone per point; sigma is the slope scale of the linear answer);
-* the foundation term ``c/2 Σ w_q v_q^2`` with ``v >= 0`` and ``v >= g - w_q``
-  at 5 Gauss points (``v = pos(g - w_q)`` at the optimum);
+* the foundation term ``c/2 Σ w_q v_q^2`` with ``v >= g - w_q`` at 5 Gauss
+  points (``v = pos(g - w_q)`` at the optimum: minimising v_q^2 makes v >= 0
+  hold by itself);
 * for a rigid obstacle, ``w >= g`` at the nodes and the same Gauss points.
 
 Every quadratic term is a ``quad_form`` of a constant sparse matrix, which
@@ -52,22 +53,41 @@ __all__ = ["solve_convex", "ConvexProgram"]
 log = logging.getLogger(__name__)
 
 # Clarabel is asked for as little as the accuracy needs, and tighter only when the
-# certificate fails.  Without an obstacle a gap tolerance of 1e-10 gives
-# stationarity ~1e-11 in two iterations more than 1e-8 (measured at 2048
-# elements: 17 against 15, stationarity 1e-11 against 5e-10); with the earlier
-# sum-of-squares formulation 1e-8 left nodal errors near 1e-6.  With an obstacle,
-# complementarity c allows an energy-norm error of about sqrt(c) and must be below
-# 1e-12: 1e-13 reaches that (1e-12 left some at 1.1e-12; 1e-14 is beyond double
-# precision).  Clarabel's default static regularisation of its KKT systems (1e-8)
-# left obstacle answers from 1024 elements on with violations of ~1e-8 W and
-# complementarity ~1e-10: a node in point contact and the Gauss points 0.047 h
-# beside it give nearly parallel constraint rows.  1e-12 certifies them up to
-# 8192 elements at no cost in iterations (measured).  If Clarabel errors at a
-# setting, the next one is tried.
+# certificate fails.  A relative duality gap c bounds the relative energy excess,
+# and so the energy-norm error by about sqrt(c): the certificate's 1e-6 needs
+# c ~ 1e-12 in the worst case.  Without an obstacle 1e-10 usually certifies
+# (2048 elements, P1 on a foundation: stationarity 9e-9 in 13 iterations) but not
+# always (a cantilever on a foundation, 8192 elements: 3.7e-6); 1e-12 certifies
+# it (3e-8) for two iterations more (15 at 2048 elements; measured).  With an
+# obstacle, complementarity c must be below 1e-12: 1e-13 reaches that (1e-12
+# left some at 1.1e-12; 1e-14 is beyond double precision).  Clarabel's default
+# static regularisation of its KKT systems (1e-8) left obstacle answers from
+# 1024 elements on with violations of ~1e-8 W and complementarity ~1e-10: a node
+# in point contact and the Gauss points 0.047 h beside it give nearly parallel
+# constraint rows.  1e-12 certifies them at no cost in iterations (measured).
+# The first rungs switch off Clarabel's Ruiz equilibration: the program is scaled
+# by construction (mixed variables, slopes over their scale sigma, depths and
+# deflections in units of W), and equilibrating it again cost iterations and
+# accuracy (measured on the Gao beam, q = -5e8 N/m: clamped, no contact, 2048
+# elements, 108 iterations with it, 16 without; on an obstacle, stationarity
+# 1.4e-5 with it and 1.2e-9 without (P1, 8192 elements), 1.9e-6 and 5e-7 (P4,
+# 2048 elements): with it a node in point contact was left 7e-11 W below the
+# obstacle, a kink that h^-1.5 magnifies in the energy norm).  Without an
+# obstacle the first rung also skips iterative refinement of the KKT solves,
+# which took a third of the iteration time: every support with and without a
+# foundation at 2048 and 8192 elements certified so, in one iteration more
+# (e.g. P1 on a foundation, 2048 elements: 16 iterations, stationarity 6e-10;
+# measured).  With an obstacle it is needed (P4, 2048 elements: not certified
+# without it).  The later rungs are the earlier ladder, equilibrated and refined.
+# If Clarabel errors at a setting, the next one is tried.
 CLARABEL_LADDER = {
-    "smooth": [dict(tol_gap_abs=1e-10, tol_gap_rel=1e-10, tol_feas=1e-10, max_iter=400),
+    "smooth": [dict(tol_gap_abs=1e-12, tol_gap_rel=1e-12, tol_feas=1e-10, max_iter=400,
+                    equilibrate_enable=False, iterative_refinement_enable=False),
+               dict(tol_gap_abs=1e-10, tol_gap_rel=1e-10, tol_feas=1e-10, max_iter=400),
                dict(tol_gap_abs=1e-13, tol_gap_rel=1e-13, tol_feas=1e-10, max_iter=400), {}],
     "obstacle": [dict(tol_gap_abs=1e-13, tol_gap_rel=1e-13, tol_feas=1e-10, max_iter=400,
+                      static_regularization_constant=1e-12, equilibrate_enable=False),
+                 dict(tol_gap_abs=1e-13, tol_gap_rel=1e-13, tol_feas=1e-10, max_iter=400,
                       static_regularization_constant=1e-12),
                  dict(tol_gap_abs=1e-13, tol_gap_rel=1e-13, tol_feas=1e-10, max_iter=400),
                  dict(tol_gap_abs=1e-10, tol_gap_rel=1e-10, tol_feas=1e-9, max_iter=400), {}],
@@ -172,15 +192,18 @@ class ConvexProgram:
             cwd = dp.c * mf.wqc * depth0
             terms.append(-((mf.NqT @ cwd) @ z) + 0.5 * float(cwd @ depth0))
         elif dp.contact == "foundation":
-            # c/2 sum w_q pos(g - w_q)^2 = c/2 sum w_q v_q^2 with v >= 0, v >= g - w_q;
-            # bonded (bilateral): v = g - w_q.  v keeps the program DPP.
+            # c/2 sum w_q pos(g - w_q)^2 = min c/2 sum w_q v_q^2 over v >= g - w_q: the
+            # weights are positive, so the minimum over v_q is at v_q = max(g - w_q, 0)
+            # and v >= 0 is implied (the same energy; the rows were dropped: at 2048
+            # elements 14 Clarabel iterations instead of 17, 47104 rows instead of
+            # 57344, measured).  Bonded (bilateral): v = g - w_q.  v keeps it DPP.
             self.c = param(dp.c, nonneg=True, name="stiffness") if np.ndim(dp.c) == 0 else 1.0
             weights = mf.wqc if np.ndim(dp.c) == 0 else dp.c * mf.wqc   # a stiffness profile
             v = cp.Variable(len(mf.wqc), name="depth")
             if dp.bilateral:
                 constraints.append(v == self.g - mf.Nq @ z)
             else:
-                constraints += [v >= 0, v >= self.g - mf.Nq @ z]
+                constraints.append(v >= self.g - mf.Nq @ z)
             terms.append(0.5 * self.c * cp.quad_form(v, cp.psd_wrap(sp.diags(weights))))
         elif dp.contact == "obstacle":
             self.obstacle = mf.A @ z >= self.g

@@ -130,17 +130,14 @@ def test_clarabel_certifies_fine_meshes(elements, kind):
 
     Their nearly parallel constraint rows left Clarabel's answers from 1024
     elements on with complementarity ~1e-10 (not certified); the answers
-    must now be certified and agree with the method of multipliers.
+    must now be certified and agree with the method of multipliers.  The flat
+    contact at 2048 elements was not certified while Clarabel equilibrated the
+    program (stationarity 1.9e-6; gaocvx.convex.CLARABEL_LADDER).
     """
     supports, q = ("P1", -5e8) if kind == "point contact" else ("P4", -5e8)
     scene = Scene.from_dict(scene_dict(supports, "gao", q=q, obstacle=0.007, elements=elements))
     a, b = solve(scene, "convex"), solve(scene, "newton")
     assert b.success, b.message
-    if (kind, elements) == ("flat contact", 2048):
-        # Clarabel's curvature noise along a flat contact zone is 8e-2 of the
-        # answer's own energy norm here (docs/stress.md): honestly not certified.
-        assert not a.success, a.message
-        return
     assert a.success, a.message
     assert np.abs(a.w - b.w).max() <= 1e-7 * np.abs(b.w).max()
     assert a.zones == b.zones
