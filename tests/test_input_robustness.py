@@ -143,7 +143,7 @@ def test_unwritable_output_is_refused_before_the_work(capsys, tmp_path, scene_fi
 
 
 def test_writable_output_check_leaves_no_file(capsys, tmp_path, scene_file):
-    from gaocvx.cli import _check_output
+    from gaocvx.cli.common import _check_output
     target = tmp_path / "out.csv"
     _check_output("--csv", target)
     assert not target.exists()

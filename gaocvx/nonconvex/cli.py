@@ -54,13 +54,13 @@ def parse_range(text: str) -> np.ndarray:
 
 
 def _scene(args):
-    from ..cli import _overrides
+    from ..cli.common import _overrides
     from ..scene import load_scene
     return load_scene(args.scene, _overrides(args))
 
 
 def _cmd_equilibria(args) -> int:
-    from ..cli import _check_output, _dumps
+    from ..cli.common import _check_output, _dumps
     from .stationary import equilibria
 
     if args.plot:
@@ -84,7 +84,7 @@ def _cmd_equilibria(args) -> int:
 
 
 def _cmd_path(args) -> int:
-    from ..cli import _check_output, _dumps
+    from ..cli.common import _check_output, _dumps
     from ..sweep import ProgressBar
     from .path import equilibrium_path
 
