@@ -222,7 +222,7 @@ def scale_markdown(rows, cg_rows, command):
         f"{n}: {b*1e3:.2f} ms" for n, b in dict((r["N"], r["base"]) for r in rows).items()) + ".",
         "", "## First-order methods: the thesis's conditional gradient and FISTA", "",
         "The conditional gradient (`minimizer = \"conditional-gradient\"`) and, for "
-        "comparison, FISTA (accelerated projected gradient, `gaocvx.cvm_minimizers."
+        "comparison, FISTA (accelerated projected gradient, `gaocvx.cvm.minimizers."
         "accelerated_gradient`, not a scene option), both stopped by the Frank-Wolfe gap "
         "g'(u - s) <= 1e-9 |I(u)| or 2000 iterations, with the default bound. *gap* is that "
         "gap relative to |I(u)| (an upper bound of the relative suboptimality) after 10 "

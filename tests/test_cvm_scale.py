@@ -9,7 +9,7 @@ import scipy.optimize as so
 
 from gaocvx import DiscreteProblem, Scene, solve
 from gaocvx.cvm import make_transform, solve_cvm
-from gaocvx.cvm_algebra import BendingSolver, nonlinear_gradient
+from gaocvx.cvm.algebra import BendingSolver, nonlinear_gradient
 from test_cvm import COMBOS, cvm, scene_for
 
 

@@ -3,7 +3,7 @@
 The Hermite bending matrix K has condition number ~N^4, and ``K U`` cancels
 terms of size N^3: anything CVM computes as a product with K or a banded
 Cholesky solve with it loses ~N^4 eps (everything at 16384 elements).  This
-module provides what :mod:`gaocvx.cvm` and :mod:`gaocvx.cvm_minimizers` use
+module provides what :mod:`gaocvx.cvm` and :mod:`gaocvx.cvm.minimizers` use
 instead, each in O(N) time and memory:
 
 * :func:`nonlinear_gradient` and :func:`nonlinear_hessian`: the Gao, axial and
@@ -25,7 +25,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .discrete import DiscreteProblem
+from ..discrete import DiscreteProblem
 
 __all__ = ["nonlinear_gradient", "nonlinear_hessian", "BendingSolver", "saddle_inverse"]
 
@@ -76,7 +76,7 @@ class BendingSolver:
     """
 
     def __init__(self, dp: DiscreteProblem):
-        from .mixed import MixedForm
+        from ..mixed import MixedForm
         flat = copy.copy(dp)
         flat.p = 0.0  # K alone, without the axial part
         self.mf = MixedForm(flat)

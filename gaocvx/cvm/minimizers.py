@@ -10,7 +10,7 @@ adjoint gradient and :meth:`bending_preconditioner`.  Two minimisers use them:
   Hessian H and one adjoint solve.  The Newton system on the free controls is
   solved by conjugate gradients preconditioned with the inverse of the
   *bending* part ``S' K S`` of the reduced Hessian (one sparse factorisation
-  per free set, :mod:`gaocvx.cvm_algebra`).  The reduced Hessian inherits the
+  per free set, :mod:`gaocvx.cvm.algebra`).  The reduced Hessian inherits the
   N^4 conditioning of the state equation, but the preconditioned operator's
   eigenvalues are generalised Rayleigh quotients ``v'Hv / v'Kv`` of the
   beam's own Hessian against its bending matrix, which do not grow with N.
@@ -28,7 +28,7 @@ import math
 
 import numpy as np
 
-from .newton import line_search
+from ..newton import line_search
 
 __all__ = ["projected_newton", "conditional_gradient", "accelerated_gradient", "pcg"]
 
