@@ -97,10 +97,10 @@ def solve_global_result(scene, elements=None, problem=None, solver=None):
         return make_result(dp, raw, "global", time.perf_counter() - t0, extra={"global": info})
     check_bounded(dp)
     n_el = dp.n_nodes - 1
-    if n_el > MAX_ELEMENTS and (dp.contact == "obstacle" or n_el > MAX_FAST_ELEMENTS):
+    if n_el > MAX_FAST_ELEMENTS:
         raise SceneError("mesh.elements", f"{_statement(dp)}; above it the global method's "
                          f"dense node programs take at most {MAX_ELEMENTS} elements, its fast "
-                         f"path {MAX_FAST_ELEMENTS} without an obstacle", n_el)
+                         f"path {MAX_FAST_ELEMENTS}", n_el)
     modes = unstable_modes(dp)
     if modes.k > MAX_MODES:
         raise SceneError("load.axial", f"{_statement(dp)}, with {modes.k} unstable buckling modes; "

@@ -178,10 +178,12 @@ def _feasible_energy(dp, prog):
     if prog.rows is None:
         return getattr(prog, "energy", dp.energy)
 
+    base = getattr(prog, "energy", dp.energy)   # the fast path's: in the mixed form
+
     def energy(u):
         gap = prog.rows @ u - prog.levels
         size = max(float(np.max(np.abs(u))), float(np.max(np.abs(prog.levels))), 1e-300)
-        return dp.energy(u) if np.min(gap, initial=0.0) >= -1e-9 * size else math.inf
+        return base(u) if np.min(gap, initial=0.0) >= -1e-9 * size else math.inf
 
     return energy
 
@@ -214,8 +216,9 @@ def _polish(dp, prog, s, u, lam, lo, hi):
         e = dp.energy(u)
         if sol.ok and sol.u is not None and dp.energy(sol.u) <= e + slack:
             s, u, lam = sol.s, sol.u, sol.lam
-        if lam is not None:
-            u, lam = contact_polish(dp, u, lam, prog.rows, prog.levels)
+        if lam is not None:   # (dense; the fast path's own polish at any N)
+            u, lam = getattr(prog, "contact_polish", contact_polish)(dp, u, lam, prog.rows,
+                                                                     prog.levels)
     polished = _newton_polish(dp, u)
     if dp.contact != "obstacle":
         return s, polished, lam
@@ -235,8 +238,9 @@ def _polish(dp, prog, s, u, lam, lo, hi):
 
 
 def fast_eligible(dp, k: int) -> bool:
-    """The fast path (:mod:`.fast`) serves up to three unstable modes without an obstacle."""
-    return 1 <= k <= 3 and dp.contact != "obstacle"
+    """The fast path (:mod:`.fast`, :mod:`.fast_contact` with an obstacle) serves up to
+    three unstable modes."""
+    return 1 <= k <= 3
 
 
 def fast_by_default(dp, k: int) -> bool:
@@ -244,9 +248,13 @@ def fast_by_default(dp, k: int) -> bool:
 
     Wherever it serves: faster than the dense programs for one or two modes
     (measured at 16-32 elements: 2-10 times), slower for three (45 s against
-    23 s at 16 elements), so those use it only beyond the dense programs.
+    23 s at 16 elements), so those use it only beyond the dense programs; with
+    an obstacle only beyond them (the dense programs stay its ground truth).
     """
-    return fast_eligible(dp, k) and (k <= 2 or dp.n_nodes - 1 > MAX_ELEMENTS)
+    beyond = dp.n_nodes - 1 > MAX_ELEMENTS
+    if dp.contact == "obstacle":
+        return fast_eligible(dp, k) and beyond
+    return fast_eligible(dp, k) and (k <= 2 or beyond)
 
 
 def solve_global(dp, modes=None, max_nodes: int = MAX_NODES, fast: bool | None = None) -> tuple:
@@ -291,7 +299,7 @@ def solve_global(dp, modes=None, max_nodes: int = MAX_NODES, fast: bool | None =
     if n_el > MAX_ELEMENTS and not fast_eligible(dp, modes.k):
         raise SceneError("mesh.elements", f"the global method's dense node programs take at most "
                          f"{MAX_ELEMENTS} elements (beyond, the fast path: up to three unstable "
-                         "modes, without an obstacle)", n_el)
+                         "modes)", n_el)
     dp = rescale_for(dp, modes)
     prior = None
     for attempt in range(2):
@@ -310,7 +318,10 @@ def solve_global(dp, modes=None, max_nodes: int = MAX_NODES, fast: bool | None =
 
 def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     k = modes.k
-    if fast:
+    if fast and dp.contact == "obstacle":
+        from .fast_contact import FastContactProgram
+        prog = FastContactProgram(dp, modes)
+    elif fast:
         from .fast import FastProgram
         prog = FastProgram(dp, modes)
     else:
@@ -382,8 +393,13 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
         # The multipliers are recomputed on the touching rows too (an interior-point
         # solver leaves its tolerance on rows far from the obstacle): either set
         # that meets every condition certifies the answer.
-        residual, lam = certify_contact(dp, modes, mf.to_hermite(z), lam, prog.rows,
-                                        prog.levels, mf.zero_floor if mf.has_load else 0.0)
+        zfloor = mf.zero_floor if mf.has_load else 0.0
+        if hasattr(prog, "certify"):   # the fast path: the same measures, in the mixed form
+            lam = mf.no_contact_forces() if lam is None else lam
+            residual = prog.certify(z, lam, zfloor)
+        else:
+            residual, lam = certify_contact(dp, modes, mf.to_hermite(z), lam, prog.rows,
+                                            prog.levels, zfloor)
     else:
         residual = certify(mf, z, lam)
     parts = mf.energy_parts(z)

@@ -1,0 +1,163 @@
+"""The fast obstacle path's amplitude ranges, final polish and certificate (any N).
+
+Companions of :class:`.fast_contact.FastContactProgram` that the dense path
+does with dense Hermite matrices (:mod:`.certificate`), which beyond a few
+hundred elements are too slow (a dense least-squares KKT solve took 14 s of
+15 at 512 elements) or lose the digits the certificate needs (condition
+~N^4):
+
+* :func:`amplitude_range`: each unstable mode's amplitude range over the
+  admissible set (a linear program), so that boxes without an admissible beam
+  are recognised as such;
+* :func:`contact_polish`: the answer polished by
+  :func:`gaocvx.contact_newton._iterate` at the largest penalty, on the mixed form;
+* :func:`certify`: :func:`.certificate.psi_certificate`'s measures, the same
+  definitions and tolerances, computed in the mixed form.
+
+Examples
+--------
+>>> from gaocvx.scene import Scene
+>>> from gaocvx.discrete import DiscreteProblem
+>>> from gaocvx.nonconvex.modes import unstable_modes
+>>> from gaocvx.nonconvex.fast_contact import FastContactProgram
+>>> scene = Scene.from_dict({"beam": {"model": "gao", "supports": "P4", "length": 1.0,
+...     "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1, "width": 1.0},
+...     "load": {"axial": 1.5e9}, "obstacle": {"gap": 0.01, "gap_above": 0.01},
+...     "mesh": {"elements": 8}})
+>>> dp = DiscreteProblem(scene, check_convexity=False)
+>>> lo, hi = amplitude_range(FastContactProgram(dp, unstable_modes(dp)))
+>>> bool(lo[0] < 0 < hi[0] and abs(lo[0] + hi[0]) < 1e-6 * hi[0])   # a channel: both ends
+True
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+import scipy.optimize as so
+
+from .. import newton as nw
+from ..discrete import STATIONARITY_TOL, complementarity
+from ..linalg import one_blas_thread
+
+__all__ = ["amplitude_range", "contact_polish", "certify", "RANGE_PAD", "POLISH_BUDGET"]
+
+log = logging.getLogger(__name__)
+
+# The amplitudes' ranges from the linear program are widened by this, relative to
+# 1 + their size (HiGHS meets its tolerances to ~1e-9; the margin only costs tightness).
+RANGE_PAD = 1e-6
+# Factorisations of the final polish (contact_newton's updates at the largest penalty).
+POLISH_BUDGET = 12
+
+
+def amplitude_range(prog):
+    """Each amplitude's range ``(lo, hi)`` over the admissible set (LP), widened by RANGE_PAD.
+
+    ``min / max  B_i z`` subject to the linking constraints and the obstacle's
+    rows, by HiGHS; unbounded sides are infinite, and so is a side HiGHS fails
+    on (a weaker range, never a wrong one).
+    """
+    mf, k = prog.mf, prog.k
+    lo, hi = np.full(k, -math.inf), np.full(k, math.inf)
+    gap0 = mf.gap(np.zeros(mf.n))
+    link0 = mf.link(np.zeros(mf.n))
+    for i in range(k):
+        # (normalised: at 2048 elements HiGHS stopped on "numerical difficulties"
+        # with the rows of B as they are, ~2e-3)
+        direction = prog.B[i] / max(float(np.max(np.abs(prog.B[i]))), 1e-300)
+        for sign in (1.0, -1.0):
+            for method in ("highs", "highs-ds", "highs-ipm"):
+                res = so.linprog(sign * direction, A_ub=-mf.A, b_ub=gap0, A_eq=mf.C,
+                                 b_eq=-link0, bounds=(None, None), method=method)
+                if res.status in (0, 3):
+                    break
+            if res.status == 0:
+                value = float(prog.B[i] @ res.x + prog.s_origin[i])
+                if sign > 0:
+                    lo[i] = value
+                else:
+                    hi[i] = value
+            elif res.status != 3:   # 3: unbounded (no limit on that side)
+                log.warning("amplitude range: linprog status %d (%s)", res.status, res.message)
+    ends = np.r_[lo, hi]
+    size = 1.0 + np.max(np.abs(ends[np.isfinite(ends)]), initial=0.0)
+    return lo - RANGE_PAD * size, hi + RANGE_PAD * size
+
+
+def contact_polish(prog, u, lam):
+    """Newton on the full problem's augmented Lagrangian from ``(u, lam)`` (banded, any N).
+
+    :func:`.certificate.contact_polish` does this with dense Hermite KKT
+    systems.  Here :func:`gaocvx.contact_newton._iterate` at the largest
+    penalty, on the mixed form, with its stopping test (the certificate's
+    measures).  Kept only if certified by those measures and not higher in
+    energy beyond round-off; otherwise ``(u, lam)`` stand.
+    """
+    from ..contact_newton import _iterate
+    from .minimum import to_mixed
+
+    mf = prog.mf
+    z0 = to_mixed(mf, u)
+    try:
+        with one_blas_thread():
+            z, lam2, _, _, residual = _iterate(mf, z0, np.asarray(lam, float), prog.rho,
+                                               prog.rho, POLISH_BUDGET)
+    except (np.linalg.LinAlgError, FloatingPointError):
+        return u, lam
+    e0 = sum(mf.energy_parts(z0).values())
+    e1 = sum(mf.energy_parts(z).values())
+    if residual is None or not nw.passes(residual) or not e1 <= e0 + 1e-12 * max(abs(e0), 1):
+        return u, lam
+    return mf.to_hermite(z), lam2
+
+
+def certify(prog, z, lam, floor: float = 0.0) -> dict:
+    """:func:`.certificate.psi_certificate`'s measures, computed in the mixed form (any N).
+
+    The same definitions and tolerances: stationarity of the Lagrangian
+    ``r = grad Pi - A' lam`` as ``sqrt(r' H_psi^-1 r)`` relative to the
+    answer's ``sqrt(u' H_psi u)`` (at least ``floor``), with
+    ``H_psi = H + 4 B' diag(c) B``; feasibility, the multipliers' sign and
+    complementarity as there.  In the Hermite DOFs ``H_psi`` has condition
+    ~N^4 and its dense Cholesky factor does not resolve the residual beyond
+    ~1000 elements (measured: 2.6e-7 at 1024, 5.5e-6 at 2048 elements for an
+    answer these measures put at 1e-10); here it is the banded KKT LU of the
+    mixed form and the Woodbury identity (``prog._solve``).  ``z`` must lie on
+    the linking constraints (``mf.on_manifold``).  A solve whose own residual,
+    solved once more, is not small against the step makes the stationarity
+    infinite (as :func:`gaocvx.newton.certify`).  ``H_psi`` is positive
+    definite when the modes passed their checks (``Psi`` convex, plus
+    ``2 B' diag(c) B``), which the caller requires for ``optimal``.
+    """
+    mf = prog.mf
+    H = mf.hessian(z)
+    D = 4.0 * prog.c
+    r = mf.gradient(z) - mf.AT @ lam
+    za = mf.absolute(z)
+    try:
+        with one_blas_thread():
+            d, mu = prog._solve(H, D, -r, -mf.link(z))
+            Bd, Bz = prog.B @ d, prog.B @ za
+            step = float(d @ (H @ d)) + float(D @ (Bd * Bd))
+            size2 = float(za @ (H @ za)) + float(D @ (Bz * Bz))
+            # the solve's own error, solved for once more
+            Hd = H @ d + prog.B.T @ (D * Bd)
+            dd, _ = prog._solve(H, D, -r - (Hd + mf.C.T @ mu), -mf.link(z) - mf.C @ d)
+            Bdd = prog.B @ dd
+            error = math.sqrt(abs(float(dd @ (H @ dd)) + float(D @ (Bdd * Bdd))))
+    except np.linalg.LinAlgError:
+        return {"stationarity": math.inf}
+    scale = max(math.sqrt(max(size2, 0.0)), floor) or 1.0
+    stationarity = math.sqrt(step) / scale if step >= 0 and size2 >= 0 else math.inf
+    if not (error <= 0.1 * math.sqrt(max(step, 0.0)) or error <= 1e-3 * STATIONARITY_TOL * scale):
+        stationarity = math.inf
+    gap = mf.gap(z)
+    size = max(float(np.max(np.abs(za[mf.w_index]), initial=0.0)), floor, 1e-300)
+    lam_scale = float(np.max(np.abs(lam), initial=0.0)) or 1.0
+    return {"stationarity": stationarity,
+            "feasibility": float(max(-np.min(gap, initial=0.0), 0.0) / size),
+            "dual": float(max(-np.min(lam, initial=0.0), 0.0) / lam_scale),
+            "complementarity": complementarity(lam, gap, scale, size)}

@@ -1,0 +1,175 @@
+"""The global method's fast path with a rigid obstacle or a channel (issue 10).
+
+References from outside the code under test: the dense CVXPY + Clarabel node
+programs (the ground truth on small meshes), the Hermite-DOF certificate of
+certificate.py, the independent energy and multi-start local searches of the
+campaign (tests/nonconvex_independent.py through nonconvex_campaign_support.py),
+and the convergence of the certified energies with the mesh.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from conftest import scene_dict
+
+from gaocvx import DiscreteProblem, Scene, SceneError, solve
+
+
+def _data(supports="P4", q=-1e8, axial=1.5e9, gap=0.01, above=None, elements=16):
+    d = scene_dict(supports, q=q, axial=axial, obstacle=gap, elements=elements)
+    if above is not None:
+        d["obstacle"]["gap_above"] = above
+    return d
+
+
+def _programs(**kw):
+    from gaocvx.nonconvex.fast_contact import FastContactProgram
+    from gaocvx.nonconvex.minimum import rescale_for
+    from gaocvx.nonconvex.modes import unstable_modes
+    from gaocvx.nonconvex.node import NodeProgram
+
+    dp = DiscreteProblem(Scene.from_dict(_data(**kw)), check_convexity=False)
+    m = unstable_modes(dp)
+    dp = rescale_for(dp, m)
+    return dp, m, FastContactProgram(dp, m), NodeProgram(dp, m)
+
+
+# The scenes: a point contact, a channel holding the beam against its ceiling, the
+# obstacle never touched, gap 0, a flat contact zone, a channel just above the limit.
+POINT = dict()
+CHANNEL = dict(q=-1e7, above=0.02)
+UNTOUCHED = dict(q=-1e7, axial=1.3e9, gap=0.1)
+GAP0 = dict(gap=0.0)
+FLAT = dict(q=-1e9, gap=0.001)
+NEAR_LIMIT = dict(q=-1e7, axial=1.1685e9, gap=0.01, above=0.01)   # P_bar_h = 1.1683e9 N
+
+
+@pytest.mark.parametrize("kw", [POINT, CHANNEL, GAP0])
+def test_node_values_and_bounds_agree_with_the_dense_programs(kw):
+    dp, m, fast, dense = _programs(**kw)
+    assert m.k == 1
+    for lo, hi in ((-3.0, 3.0), (-1.0, 0.5), (0.5, 2.0), (-0.3, -0.3), (1.0, 1.0), (-40.0, -20.0)):
+        a, b = fast.solve_box([lo], [hi]), dense.solve_box([lo], [hi])
+        if b.status == "infeasible":   # no admissible beam has these amplitudes
+            assert a.lower == math.inf
+            continue
+        assert a.ok and b.ok
+        scale = abs(b.value) + 1.0
+        # each method's bound lies below the other's value, and the values agree
+        assert a.lower <= b.value + 1e-11 * scale and b.lower <= a.value + 1e-11 * scale
+        assert a.value == pytest.approx(b.value, rel=1e-9, abs=1e-9)
+        assert a.value - a.lower <= 1e-11 * scale
+        assert lo - 1e-10 <= a.s[0] <= hi + 1e-10   # (the box rows are met to FEASIBLE)
+
+
+def test_the_bound_holds_with_wrong_multipliers():
+    """The node bound is Lagrangian duality: any multipliers >= 0 give a valid bound
+    (the inner solve may be inexact; it only gets weaker)."""
+    dp, m, fast, dense = _programs(**CHANNEL)
+    rng = np.random.default_rng(3)
+    lo, hi = np.array([-3.0]), np.array([3.0])
+    truth = dense.solve_box(lo, hi).value
+    sol = fast.solve_box(lo, hi)
+    for _ in range(6):
+        lam = sol.lam * rng.uniform(0, 3, size=sol.lam.shape) + rng.uniform(0, 1e-2, size=sol.lam.shape)
+        eta = rng.uniform(0, 10, size=2)
+        bound = fast.dual_bound(lo, hi, lam, eta)
+        assert bound <= truth + 1e-12 * abs(truth)
+    assert fast.dual_bound(lo, hi, sol.lam, np.zeros(2)) == pytest.approx(truth, rel=1e-10)
+
+
+@pytest.mark.parametrize("kw", [POINT, CHANNEL, UNTOUCHED, GAP0])
+def test_certified_minimum_equals_the_dense_one(kw):
+    from gaocvx.nonconvex.minimum import solve_global
+
+    out = {}
+    for fast in (False, True):
+        dp = DiscreteProblem(Scene.from_dict(_data(**kw)), check_convexity=False)
+        dp, raw, info = solve_global(dp, fast=fast)
+        assert raw["status"] == "optimal", raw["message"]
+        energy = sum(raw["mixed"].energy_parts(raw["z"]).values()) * dp.E0
+        out[fast] = (dp.to_physical(raw["u"])[0], info["lower_bound"], energy, info["unique"])
+    (w0, lo0, e0, u0), (w1, lo1, e1, u1) = out[False], out[True]
+    scale = max(abs(e0), 1e-3)
+    assert abs(e1 - e0) <= 1e-9 * scale and lo0 <= e1 + 1e-9 * scale and lo1 <= e0 + 1e-9 * scale
+    assert u0 and u1
+    assert np.max(np.abs(w1 - w0)) <= 1e-6 * max(np.max(np.abs(w0)), 1e-12)
+
+
+def test_mirror_symmetric_channel_has_two_minimisers():
+    """No load, a symmetric channel: buckled up or down alike (not unique)."""
+    from gaocvx.nonconvex.minimum import solve_global
+
+    dp = DiscreteProblem(Scene.from_dict(_data(q=0.0, above=0.01)), check_convexity=False)
+    dp, raw, info = solve_global(dp, fast=True)
+    assert raw["status"] == "optimal" and info["unique"] is False
+    w = dp.to_physical(raw["u"])[0]
+    other = dp.to_physical(info["alternatives"][0]["u"])[0]
+    assert np.max(np.abs(other + w)) <= 1e-6 * np.max(np.abs(w))
+    assert info["alternatives"][0]["energy"] == pytest.approx(
+        sum(raw["mixed"].energy_parts(raw["z"]).values()) * dp.E0, rel=1e-9)
+
+
+def test_mixed_certificate_agrees_with_the_hermite_one():
+    from gaocvx.nonconvex.certificate import psi_certificate
+    from gaocvx.nonconvex.minimum import solve_global, to_mixed
+
+    dp = DiscreteProblem(Scene.from_dict(_data(elements=64, **CHANNEL)), check_convexity=False)
+    dp, raw, info = solve_global(dp, fast=True)
+    assert raw["status"] == "optimal"
+    _, m, fast, _ = _programs(elements=64, **CHANNEL)
+    # the same scale as the answer's
+    from gaocvx.nonconvex.fast_contact import FastContactProgram
+    fast = FastContactProgram(dp, m)
+    mf = fast.mf
+    z = mf.on_manifold(to_mixed(mf, raw["u"]))
+    for lam in (raw["lam"], 1.001 * raw["lam"]):
+        mixed = fast.certify(z, lam, mf.zero_floor)
+        hermite = psi_certificate(dp, m, raw["u"], lam, fast.rows, fast.levels, mf.zero_floor)
+        for key in ("stationarity", "feasibility", "dual", "complementarity"):
+            assert mixed[key] == pytest.approx(hermite[key], rel=0.05, abs=1e-13), key
+
+
+@pytest.mark.parametrize("kw", [FLAT, pytest.param(NEAR_LIMIT, marks=pytest.mark.slow)])
+def test_independent_campaign_checker_finds_no_violation(kw, monkeypatch):
+    """The campaign's rules (independent energy, KKT point, nothing found below the
+    bound) with the fast path forced on a mesh the dense programs also take."""
+    import gaocvx.nonconvex.minimum as minimum
+    from campaign import Case
+    from nonconvex_campaign_support import run_case
+
+    monkeypatch.setattr(minimum, "fast_by_default", lambda dp, k: minimum.fast_eligible(dp, k))
+    rec = run_case(Case(_data(**kw), ("obstacle",)), starts=8)
+    assert rec["status"] == "optimal" and rec["violations"] == [], rec
+
+
+def test_beyond_the_dense_programs_auto_takes_the_fast_path():
+    r = solve(Scene.from_dict(_data(elements=256, **CHANNEL)))
+    assert r.method == "global" and r.status == "optimal", r.message
+    assert r.max["w"] == pytest.approx(0.02, rel=1e-9) and r.min["w"] >= -0.01 * (1 + 1e-9)
+    r16 = solve(Scene.from_dict(_data(**CHANNEL)))
+    assert r.energy == pytest.approx(r16.energy, rel=1e-4)
+
+
+def test_beyond_the_fast_path_is_refused():
+    with pytest.raises(SceneError, match="elements"):
+        solve(Scene.from_dict(_data(elements=4096)), "global")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kw", [POINT, CHANNEL])
+def test_certified_energies_converge_with_the_mesh(kw):
+    """64..2048 elements, all certified: successive differences of the energy fall
+    with a fitted order of at least 2 (the obstacle's free boundary limits it below
+    the smooth h^4)."""
+    energies = []
+    for n in (64, 128, 256, 512, 1024, 2048):
+        r = solve(Scene.from_dict(_data(elements=n, **kw)), "global")
+        assert r.status == "optimal", (n, r.message)
+        energies.append(r.energy)
+    # successive differences ~ h^order: log2 of them falls by `order` per halving of h
+    d = np.abs(np.diff(energies))
+    order = -np.polyfit(np.arange(len(d)), np.log2(d), 1)[0]
+    assert order >= 2.0, (energies, order)
