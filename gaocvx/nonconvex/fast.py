@@ -15,7 +15,8 @@ Differentiating the slice's optimality conditions gives its Hessian too,
 function ``G(s) = F(s) + sum c_i s_i^2 + chord(s)`` (k <= 3 variables), found
 by projected Newton with that Hessian, and ``G(s0) + min_box G'(s0)(s - s0)``
 is a lower bound by convexity at whatever point ``s0`` it stops.  Obstacles
-are not handled here (the dense programs of :mod:`.node` are).
+and channels are not handled here: :mod:`.fast_contact` (and the dense
+programs of :mod:`.node`) handle them.
 
 Examples
 --------

@@ -379,10 +379,11 @@ class FastContactProgram(FastProgram):
         from .fast_check import contact_polish
         return contact_polish(self, u, lam)
 
-    def certify(self, z, lam, floor: float = 0.0) -> dict:
-        """The obstacle certificate's measures in the mixed form (:func:`.fast_check.certify`)."""
-        from .fast_check import certify
-        return certify(self, z, lam, floor)
+    def certify(self, z, lam, floor: float = 0.0) -> tuple:
+        """The obstacle certificate in the mixed form: (measures, multipliers)
+        (:func:`.fast_check.certify_contact`)."""
+        from .fast_check import certify_contact
+        return certify_contact(self, z, lam, floor)
 
     def obstacle_multipliers(self):
         """The last node's obstacle multipliers (rows of :attr:`rows`)."""

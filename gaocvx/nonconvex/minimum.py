@@ -396,7 +396,7 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
         zfloor = mf.zero_floor if mf.has_load else 0.0
         if hasattr(prog, "certify"):   # the fast path: the same measures, in the mixed form
             lam = mf.no_contact_forces() if lam is None else lam
-            residual = prog.certify(z, lam, zfloor)
+            residual, lam = prog.certify(z, lam, zfloor)
         else:
             residual, lam = certify_contact(dp, modes, mf.to_hermite(z), lam, prog.rows,
                                             prog.levels, zfloor)
