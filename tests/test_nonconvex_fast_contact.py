@@ -160,6 +160,23 @@ def test_beyond_the_fast_path_is_refused():
 
 
 @pytest.mark.slow
+def test_reflected_minimiser_of_a_symmetric_channel_is_reported():
+    """P1 in a channel, k = 2, 256 elements: the minimiser is slightly asymmetric
+    (3.4e-6 m against 1 cm) and its image in x -> L - x has the same energy; the
+    two amplitudes +-s_2 fell in one group of leaves, and unique was reported."""
+    from gaocvx.nonconvex.minimum import solve_global
+
+    d = _data("P1", q=-1e7, axial=1.1e10, gap=0.005, above=0.01, elements=256)
+    dp, raw, info = solve_global(DiscreteProblem(Scene.from_dict(d), check_convexity=False))
+    assert raw["status"] == "optimal" and info["unstable_modes"] == 2
+    w = dp.to_physical(raw["u"])[0]
+    assert np.max(np.abs(w - w[::-1])) > 1e-4 * np.max(np.abs(w))
+    assert info["unique"] is False
+    other = dp.to_physical(info["alternatives"][0]["u"])[0]
+    assert np.max(np.abs(other - w[::-1])) <= 1e-9 * np.max(np.abs(w))
+
+
+@pytest.mark.slow
 def test_solve_certifies_a_flat_contact_the_dense_programs_do_not():
     """16 elements, a beam pressed flat onto an obstacle 1 mm below: the dense programs
     stop uncertified (2001 nodes), and solve() then takes the fast path."""
