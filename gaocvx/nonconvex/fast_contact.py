@@ -31,9 +31,11 @@ terms are products of non-negative numbers.  So the node's minimum is at least
 bounds it in the modes' directions, ``K - p G`` on the complement), so its
 minimum over the linking constraint is found by Newton's method, whose
 iterate is checked to have converged to round-off.  The bound taken is
-``L(z_L) - dec - 1e-13 max(|L|, 1)`` with ``dec = d'(Hd)`` the last squared
+``L(z_L) - dec - 1e-12 max(|L|, T, 1)`` with ``dec = d'(Hd)`` the last squared
 Newton decrement (for a convex function near its minimum ``L - min L`` is about
-``dec / 2``) and the same round-off margin as :class:`.fast.FastProgram`.
+``dec / 2``) and ``T`` the sum of the magnitudes of the terms summed (energy
+parts, multipliers times gaps, the chord): the round-off of sums of 10^4
+quadrature terms at 2048 elements.
 It is valid however inexact the multipliers are: inexact multipliers only
 make it weaker (and the branch and bound then does not close, which shows
 as ``inaccurate``).  With the multipliers of the last update, the augmented
@@ -94,8 +96,10 @@ FEASIBLE = 1e-11
 # Multiplier updates per node at most, Newton steps per inner problem at most.
 MAX_UPDATES = 40
 MAX_NEWTON = 60
-# The round-off margin of a bound (as FastProgram's slices).
-ROUNDOFF = 1e-13
+# The round-off margin of a bound, relative to the sum of the magnitudes of the
+# terms of the Lagrangian (ten times FastProgram's 1e-13 of the value: sums of 10^4
+# quadrature terms at 2048 elements, multipliers times gaps).
+ROUNDOFF = 1e-12
 # Multiplier updates at the largest penalty without halving the violation that
 # count as a stall (an infeasible box).
 STALL = 6
@@ -124,6 +128,7 @@ class FastContactProgram(FastProgram):
         self._lam = mf.no_contact_forces()
         self._eta = np.zeros(2 * self.k)
         self._cache = []   # (amplitudes, z, lam) of feasible node answers: starts
+        self._margin = 0.0  # the last dual bound's margin (decrement and round-off)
         self._last_lam = self._lam
         from .fast_check import amplitude_range
         self.smin, self.smax = amplitude_range(self)
@@ -316,7 +321,9 @@ class FastContactProgram(FastProgram):
                 # A solve went wrong: no bound from this attempt.
                 log.warning("fast contact node: bound %.17g above the value %.17g", lower, J)
                 return -math.inf, *best
-            if (bound > -math.inf and J - lower <= 1e-12 * max(abs(J), 1.0)) or stalled:
+            # done when the bound is as close as its own round-off margin allows
+            if (bound > -math.inf and J - lower <= 1e-12 * max(abs(J), 1.0) + 2 * self._margin) \
+                    or stalled:
                 break
         if best is None:
             return None
@@ -353,11 +360,18 @@ class FastContactProgram(FastProgram):
         slope, offset = -self.c * (clo + chi), float(np.sum(self.c * clo * chi))
         lam, eta = np.maximum(lam, 0.0), np.maximum(eta, 0.0)
         z = self._z.copy() if z is None else z
-        _, value, dec, conv = self._newton(z, lam, eta, 0.0, 0.0, lo, hi, slope, tight=True)
+        zl, value, dec, conv = self._newton(z, lam, eta, 0.0, 0.0, lo, hi, slope, tight=True)
         if not conv:
             return -math.inf
         value += offset
-        return value - dec - ROUNDOFF * max(abs(value), 1.0)
+        # Round-off: relative to the terms summed, not to their (cancelling) total.
+        s = self.B @ zl + self.s_origin
+        terms = (sum(abs(v) for v in self.mf.energy_parts(zl).values())
+                 + float(np.abs(lam) @ np.abs(self.mf.gap(zl)))
+                 + float(eta @ np.abs(np.r_[s - lo, hi - s]))
+                 + float(np.abs(self.c) @ (s * s)) + float(np.abs(slope) @ np.abs(s)) + abs(offset))
+        self._margin = dec + ROUNDOFF * max(abs(value), terms, 1.0)
+        return value - self._margin
 
     def reduced(self, s0):
         """``F(s0)`` (the energy's minimum on the slice ``s = s0``), its gradient, ``u``, success.
