@@ -129,6 +129,7 @@ class FastContactProgram(FastProgram):
         self._eta = np.zeros(2 * self.k)
         self._cache = []   # (amplitudes, z, lam) of feasible node answers: starts
         self._margin = 0.0  # the last dual bound's margin (decrement and round-off)
+        self._violation = math.inf  # the last node answer's largest relative violation
         self._last_lam = self._lam
         from .fast_check import amplitude_range
         self.smin, self.smax = amplitude_range(self)
@@ -264,7 +265,7 @@ class FastContactProgram(FastProgram):
         if best is None:
             return NodeSolution(-math.inf, math.nan, None, None, None, False, "failed")
         J, z, s, lam, eta, violation = best
-        self._z, self._lam, self._eta = z, lam, eta
+        self._z, self._lam, self._eta, self._violation = z, lam, eta, violation
         self._last_lam = lam
         if violation <= FEASIBLE:
             self._cache.append((s, z, lam))
@@ -382,7 +383,10 @@ class FastContactProgram(FastProgram):
         """
         s0 = np.asarray(s0, float)
         sol = self.solve_box(s0, s0)
-        if sol.u is None:
+        if sol.u is None or self._violation > FEASIBLE:
+            # (an iterate that violates the rows is no beam: its energy is no value of
+            # F; once taken by the polish, an answer at gap 0 was 0.2 of itself below
+            # the obstacle)
             return math.inf, np.zeros(self.k), None, sol.ok
         # F's multiplier of B z = s0 is eta_lo - eta_hi (J's chord cancels its own
         # gradient at s = s0)
