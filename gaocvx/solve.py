@@ -163,10 +163,9 @@ def _solve_exact(dp: DiscreteProblem, method: str, solver: str = "clarabel",
     size, or a sweep's).  A stiff foundation, an obstacle or the Gao term's
     stiffening can make the answer many times smaller or larger; absolute
     tolerances in units of W (the convex solver's, the obstacle's feasibility)
-    would then be loose or unreachable against the answer itself.  So an
-    answer that is not certified is solved again, from it, measured in its own
-    size, whenever that differs from W by more than RESCALE (at most twice).  A
-    certified one stands: the certificate measures it against its own size.
+    would then be loose or unreachable against the answer itself.  So the
+    problem is solved again, from the first answer, measured in its own size,
+    whenever that differs from W by more than RESCALE (at most twice).
     Returns the problem as last scaled and its raw result.
     """
     def run(problem, start):
@@ -182,13 +181,6 @@ def _solve_exact(dp: DiscreteProblem, method: str, solver: str = "clarabel",
         # measured in the floor's units, where the certificate measures it.
         size = raw["mixed"].deflection_size(raw["z"])
         if not math.isfinite(size) or 1.0 / RESCALE <= size <= RESCALE:
-            break
-        if raw["status"] == "optimal":
-            # Certified already: every measure of the certificate is relative to the
-            # answer's own size and energy norm, so it holds in the answer's scale
-            # (a re-solve could only be refused, see below).  A held cantilever at
-            # 8192 elements, 0.018 W, took a second convex solve for nothing: 5.6
-            # times the best support's time instead of 2.6.
             break
         try:
             scaled = dp.rescaled(dp.W * size)
