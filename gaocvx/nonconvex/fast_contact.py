@@ -93,6 +93,9 @@ log = logging.getLogger(__name__)
 # The multiplier updates stop when no row is violated by more than this fraction
 # of the answer's size (contact_newton stops at 1e-9; the caller accepts 1e-9).
 FEASIBLE = 1e-11
+# A node answer violating the rows by more than this (relative to its size, as the
+# caller's test of admissibility) is no beam: the reduced function is infinite there.
+ADMISSIBLE = 1e-9
 # Multiplier updates per node at most, Newton steps per inner problem at most.
 MAX_UPDATES = 40
 MAX_NEWTON = 60
@@ -130,6 +133,10 @@ class FastContactProgram(FastProgram):
         self._cache = []   # (amplitudes, z, lam) of feasible node answers: starts
         self._margin = 0.0  # the last dual bound's margin (decrement and round-off)
         self._violation = math.inf  # the last node answer's largest relative violation
+        # Newton's tolerances are relative to the energy, but not to less than that of
+        # an answer of the certificate's floor size (a beam lying flat at gap 0 has
+        # energy 1e-19: against 1 its slice answer, 3.7e-5 from stationary, passed)
+        self._efloor = mf.zero_floor ** 2 if mf.has_load else 1.0
         self._last_lam = self._lam
         from .fast_check import amplitude_range
         self.smin, self.smax = amplitude_range(self)
@@ -181,7 +188,8 @@ class FastContactProgram(FastProgram):
                 return z, value, math.inf, False
             Bd = B @ d
             dec = float(d @ (H @ d)) + float(D @ (Bd * Bd))
-            floor = max(abs(value), 1.0)
+            # (the bound's Newton against 1: its decrement is subtracted from the bound)
+            floor = max(abs(value), 1.0 if tight else self._efloor)
             if not math.isfinite(dec):
                 return z, value, dec, False
             # The function is convex: a negative curvature along d is round-off (at
@@ -383,7 +391,7 @@ class FastContactProgram(FastProgram):
         """
         s0 = np.asarray(s0, float)
         sol = self.solve_box(s0, s0)
-        if sol.u is None or self._violation > FEASIBLE:
+        if sol.u is None or self._violation > ADMISSIBLE:
             # (an iterate that violates the rows is no beam: its energy is no value of
             # F; once taken by the polish, an answer at gap 0 was 0.2 of itself below
             # the obstacle)
