@@ -133,6 +133,10 @@ def test_cli_equilibria_and_path(tmp_path, capsys):
     assert rows[0].startswith("P,w_c") and len(rows) == 1 + 1 + 1 + 3
     assert len(out.splitlines()) == 5
     assert main(["path", str(path), "--axial", "0:2e9"]) == 2
+    capsys.readouterr()
+    for at in ("5", "-1", "nan"):   # off the 1 m beam, or no number: refused, naming --at
+        assert main(["path", str(path), "--axial=-1e9:2e9:3", "--at", at]) == 2
+        assert capsys.readouterr().err.startswith("error: --at: ")
 
 
 @pytest.mark.parametrize("q", [None, -5e7])

@@ -34,6 +34,8 @@ It is split by concept:
   banded factorisations and the check that ``P < P_bar_h``;
 * :mod:`gaocvx.limit.enclosure` -- the value of P_bar_h with rigorous bounds
   (:class:`Enclosure`);
+* :mod:`gaocvx.limit.bonded` -- a bonded foundation's limit P_hat_h
+  (:class:`~gaocvx.limit.bonded.BondedLimit`);
 * this module -- the glue to :class:`~gaocvx.discrete.DiscreteProblem`
   (:func:`analysis`, :func:`p_bar_h`, :func:`check`).
 

@@ -27,6 +27,7 @@ matrices, the KKT ordering, and linear maps from quadrature weights to the
 entries of the banded KKT matrix) is a :class:`MixedStructure`, built once
 and shared by every scene on that mesh (a sweep, the repeated solves of a
 benchmark).  A Newton step then assembles its KKT matrix with a few sparse
+matrix-vector products instead of sparse matrix-matrix products.
 
 One module per part: :mod:`.structure` (what depends only on the mesh, cached),
 :mod:`.kkt` (the Hessian kept as quadrature weights, the banded KKT factor) and

@@ -93,6 +93,9 @@ def _cmd_path(args) -> int:
         if name:
             _check_output(option, name, suffixes=option == "--plot")
     scene = _scene(args)
+    if args.at is not None:
+        from ..scene import number
+        number("--at", args.at, lo=0.0, hi=scene.beam.length)   # a point of the beam [m]
     bar = ProgressBar("path") if sys.stderr.isatty() else None
     path = equilibrium_path(scene, values, x_c=args.at, progress=bar)
     if args.json:
@@ -124,7 +127,7 @@ def add_commands(sub, common) -> None:
     ``common(p)`` adds the options every scene command takes (--set, --elements, ...).
     """
     p = sub.add_parser("equilibria", help="every equilibrium above the convexity limit "
-                       "(one unstable mode), sorted by energy")
+                       "(one or two unstable modes), sorted by energy")
     p.add_argument("scene", metavar="SCENE")
     common(p)
     p.add_argument("--plot", metavar="FILE", help="write every equilibrium's deflection")
@@ -133,7 +136,8 @@ def add_commands(sub, common) -> None:
     p = sub.add_parser("path", help="the equilibrium path: every equilibrium against P")
     p.add_argument("scene", metavar="SCENE")
     p.add_argument("--axial", required=True, metavar="START:STOP:NUM",
-                   help="axial forces [N], e.g. -1e9:4e9:51")
+                   help="axial forces [N], e.g. --axial=-1e9:4e9:51 (with '=' when START is "
+                   "negative)")
     p.add_argument("--at", type=float, metavar="X",
                    help="where to take the deflection [m] (default: the first mode's peak)")
     common(p)
