@@ -229,3 +229,24 @@ def test_path_on_256_elements_converges_with_the_mesh():
     assert w[256][0] == pytest.approx(w[64][0], rel=1e-8)
     ratio = np.abs(w[64][1:] - w[128][1:]) / np.abs(w[128][1:] - w[256][1:])
     assert np.all((ratio > 14) & (ratio < 18)), ratio   # measured: 15.994 to 15.998
+
+
+def test_equilibria_in_a_narrow_channel():
+    """A channel of 2 mm below and 3 mm above, where the one-mode estimate's scale is
+    17 cm: one grid point of 121 was admissible and two of three equilibria were missed
+    (found by a new-user trial).  Expected: w = 0 (unstable, q = 0), the beam held at the
+    ceiling and the beam held on the floor (both stable), and the global minimiser is
+    the lowest of them."""
+    data = {"beam": {"model": "gao", "supports": "P4", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                     "half_thickness": 0.1, "width": 1.0},
+            "load": {"q": 0.0, "axial": 4.5552e9}, "mesh": {"elements": 16},
+            "obstacle": {"gap": 0.002, "gap_above": 0.003}}
+    eqs = equilibria(Scene.from_dict(data))
+    assert [e.status for e in eqs] == ["optimal"] * 3
+    assert [e.stable for e in eqs] == [True, True, False]
+    assert eqs[0].max["w"] == pytest.approx(0.003, rel=1e-6)     # at the ceiling
+    assert eqs[1].min["w"] == pytest.approx(-0.002, rel=1e-6)    # on the floor
+    assert max(abs(eqs[2].min["w"]), abs(eqs[2].max["w"])) < 1e-9
+    best = solve(Scene.from_dict(data), "global")
+    assert best.status == "optimal"
+    assert eqs[0].energy == pytest.approx(best.energy, rel=1e-8)

@@ -198,12 +198,25 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
     if modes.k == 2:
         from .stationary2 import find_plane
         return find_plane(dp, prog, S)
-    return _find(dp, prog, S, np.asarray(seeds, float) / dp.W, grid)
+    lo, hi = -S, S
+    if dp.contact == "obstacle":
+        # The grid over the admissible amplitudes only: a channel of 2 mm in a scale
+        # of 17 cm (the one-mode estimate's) left one grid point of 121 admissible
+        # (s = 0), and two of three equilibria were missed.  The range is a linear
+        # program's, its ends bounds by weak duality (:func:`.fast_check.amplitude_range`).
+        from .fast_check import amplitude_range
+        from .fast_contact import FastContactProgram
+        a, b = amplitude_range(FastContactProgram(dp, modes))
+        lo, hi = max(-S, float(a[0])), min(S, float(b[0]))
+    from .minimum import scene_energy
+    return _find(dp, prog, S, np.asarray(seeds, float) / dp.W, grid, (lo, hi),
+                 scene_energy(dp, modes))
 
 
-def _find(dp, prog, S, seeds, grid):
+def _find(dp, prog, S, seeds, grid, span=None, floor=0.0):
     t0 = time.perf_counter()
     cache = {}
+    lo, hi = span if span is not None else (-S, S)
 
     def dF(s):
         if s not in cache:
@@ -211,7 +224,10 @@ def _find(dp, prog, S, seeds, grid):
             cache[s] = (F, float(d[0]), u, ok)
         return cache[s]
 
-    pts = np.union1d(np.linspace(-S, S, grid), seeds[np.abs(seeds) <= S])
+    inside = seeds[(seeds >= lo) & (seeds <= hi)]
+    if lo <= 0.0 <= hi:   # the trivial equilibrium of an unloaded beam
+        inside = np.r_[inside, 0.0]
+    pts = np.union1d(np.linspace(lo, hi, grid), inside)
     vals = [(float(s), dF(float(s))) for s in pts]
     # An obstacle bounds the amplitudes (a beam lying flat on it has the smallest):
     # where the grid steps from infeasible to feasible, the boundary is found by
@@ -275,7 +291,10 @@ def _find(dp, prog, S, seeds, grid):
         w, slope = dp.to_physical(u)
         # |F'| times the amplitude: the work of the residual force, relative to
         # the equilibrium's energy scale (w = 0: the amplitude range's thousandth)
-        size = sum(abs(v) for v in dp.energy_parts(u).values()) or scale
+        # (at least the scene's own energy: a trivial equilibrium the dense
+        # programs return as 1e-13 instead of 0 has energy parts of 1e-16, against
+        # which any residual was too large)
+        size = max(sum(abs(v) for v in dp.energy_parts(u).values()), floor) or scale
         res = abs(d0) * max(abs(r), 1e-3 * S) / size
         status = "optimal" if ok and res <= ROOT_TOL else "inaccurate"
         out.append(Equilibrium(float(dp.energy(u) * dp.E0), bool(stable), [float(r)], dp.x.copy(),
