@@ -135,3 +135,19 @@ def test_channel_near_the_limit_re_solved_in_its_own_scale():
     assert not rec["violations"], rec["violations"]
     assert rec["status"] == "optimal", rec.get("message")
     assert rec["nodes"] < 1000, rec["nodes"]   # it stopped at 2569 (the 120 s clock)
+
+
+def test_an_image_within_the_gap_that_is_no_equilibrium_is_not_reported():
+    """Campaign scene 1:66: a P1 beam buckled 0.2 m under a small table load is 2e-7 m
+    from symmetric, so its image in x -> L - x lay within the certified gap and was
+    reported as a second minimiser, which is no KKT point of the independent energy.
+    Polished, the image falls back onto the answer: unique, and the checker agrees."""
+    data = {"beam": {"model": "gao", "supports": "P1", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                     "half_thickness": 0.1, "width": 1.0},
+            "load": {"q": [[0.0, -106916.88645913731], [0.6349848627588336, 16655.745810179797],
+                           [1.0, 27777.750251439138]], "axial": 9193998558.694605},
+            "mesh": {"elements": 12}, "obstacle": {"gap": 0.003575828581718178}}
+    from campaign import Case
+    rec = run_case(Case(data, ("P1", "obstacle", "table"), "1:66"), starts=12, seed=66)
+    assert not rec["violations"], rec["violations"]
+    assert rec["status"] == "optimal" and rec["unique"], rec.get("message")
