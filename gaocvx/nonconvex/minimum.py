@@ -410,13 +410,14 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
         if not e2 <= best_e + tol or any(norm(u2 - x) <= DISTINCT * norm(best_u)
                                          for x in known):
             continue
-        s2, p2, lam2 = _polish(dp, prog, modes.phi.T @ (dp.G @ u2), u2, None, lo, hi)
+        s_img = modes.phi.T @ (dp.G @ u2)
+        s2, p2, lam2 = _polish(dp, prog, s_img, u2, None, lo, hi)
         if any(norm(p2 - x) <= DISTINCT * norm(best_u) for x in known):
             continue   # no minimiser of its own: it falls back onto a known one
         if norm(p2 - u2) <= DISTINCT * norm(best_u):
-            alternatives.append((e2, u2, modes.phi.T @ (dp.G @ u2), None))
-        elif feasible(p2) <= best_e + tol:
-            alternatives.append((feasible(p2), p2, s2, lam2))
+            alternatives.append((e2, u2, s_img, None))
+        elif (ep := feasible(p2)) <= best_e + tol:
+            alternatives.append((ep, p2, s2, lam2))
 
     mf = MixedForm.on_obstacle(dp) if dp.contact == "obstacle" else MixedForm(dp)
     z = mf.on_manifold(to_mixed(mf, best_u))

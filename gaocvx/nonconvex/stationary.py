@@ -158,7 +158,7 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         on too fine a mesh.
     """
     from .api import MAX_FAST_ELEMENTS, provably_convex
-    from .minimum import MAX_ELEMENTS, rescale_for
+    from .minimum import MAX_ELEMENTS, rescale_for, scene_energy
     from .modes import unstable_modes
     from .node import NodeProgram
 
@@ -208,15 +208,13 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         from .fast_contact import FastContactProgram
         a, b = amplitude_range(FastContactProgram(dp, modes))
         lo, hi = max(-S, float(a[0])), min(S, float(b[0]))
-    from .minimum import scene_energy
-    return _find(dp, prog, S, np.asarray(seeds, float) / dp.W, grid, (lo, hi),
+    return _find(dp, prog, S, np.asarray(seeds, float) / dp.W, grid, lo, hi,
                  scene_energy(dp, modes))
 
 
-def _find(dp, prog, S, seeds, grid, span=None, floor=0.0):
+def _find(dp, prog, S, seeds, grid, lo, hi, floor):
     t0 = time.perf_counter()
     cache = {}
-    lo, hi = span if span is not None else (-S, S)
 
     def dF(s):
         if s not in cache:
