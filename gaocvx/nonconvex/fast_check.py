@@ -165,14 +165,17 @@ def certify_contact(prog, z, lam, floor: float = 0.0) -> tuple:
         The multipliers the measures belong to.
     """
     mf = prog.mf
-    za = mf.absolute(z)
-    size = max(float(np.max(np.abs(za[mf.w_index]), initial=0.0)), floor, 1e-300)
-    touching = np.where(mf.gap(z) <= TOUCH_TOL * size, lam, 0.0)
+    touching = np.where(mf.gap(z) <= TOUCH_TOL * _size(mf, z, floor), lam, 0.0)
     for cand in (touching, lam):
         res = certify(prog, z, cand, floor)
         if nw.passes(res):
             return res, cand
     return res, lam   # neither: the solver's own, as measured
+
+
+def _size(mf, z, floor):
+    """The answer's largest nodal |w|, at least ``floor`` (as :func:`.certificate._size`)."""
+    return max(float(np.max(np.abs(mf.absolute(z)[mf.w_index]), initial=0.0)), floor, 1e-300)
 
 
 def certify(prog, z, lam, floor: float = 0.0) -> dict:
@@ -216,7 +219,7 @@ def certify(prog, z, lam, floor: float = 0.0) -> dict:
     if not (error <= 0.1 * math.sqrt(max(step, 0.0)) or error <= 1e-3 * STATIONARITY_TOL * scale):
         stationarity = math.inf
     gap = mf.gap(z)
-    size = max(float(np.max(np.abs(za[mf.w_index]), initial=0.0)), floor, 1e-300)
+    size = _size(mf, z, floor)
     lam_scale = float(np.max(np.abs(lam), initial=0.0)) or 1.0
     return {"stationarity": stationarity,
             "feasibility": float(max(-np.min(gap, initial=0.0), 0.0) / size),
