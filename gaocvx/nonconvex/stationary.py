@@ -46,7 +46,7 @@ from ..errors import SceneError
 from ..result import extremum
 from .bounds import check_bounded, equilibrium_box
 
-__all__ = ["Equilibrium", "equilibria", "GRID"]
+__all__ = ["Equilibrium", "equilibria", "ContactSlices", "GRID"]
 
 log = logging.getLogger(__name__)
 
@@ -119,6 +119,191 @@ class Equilibrium:
                           "slope": self.slope.tolist()}}
 
 
+class ContactSlices:
+    """The reduced function with a rigid obstacle (or channel) at any N: banded Newton on slices.
+
+    ``F(s0)`` is the energy's minimum over the slice ``B z = s0`` of the
+    mixed variables of ``prog`` (a :class:`.fast_contact.FastContactProgram`,
+    whose mixed form, amplitude rows ``B`` and admissible amplitude range
+    are used as they are).  The amplitudes are fixed exactly, as by
+    :class:`.fast.FastProgram`: each Newton step solves the banded KKT system
+    bordered by the k rows of ``B`` (a Schur complement of size k), so that
+    the gradient ``dF/ds = -nu`` is the multiplier of those rows from a
+    linear solve.  The obstacle's rows are taken by the method of
+    multipliers at the program's largest penalty (:mod:`gaocvx.contact_newton`),
+    updated until no row is violated by more than ``FEASIBLE`` of the
+    answer's size; at the inner minimiser with the multipliers ``lam`` the
+    optimality conditions of the slice hold exactly with the updated
+    multipliers ``max(0, lam - rho gap)``, so ``-nu`` is the gradient of
+    the slice problem with the obstacle moved by at most that violation.
+
+    (``prog.reduced`` solves the node problem on the degenerate box
+    ``[s0, s0]`` instead and reads the gradient from the box rows'
+    augmented-Lagrangian multipliers: their accuracy is the box penalty times
+    the rows' last violation, measured 1e-5 of ``F'``'s range at 16 elements
+    (untouched obstacle), against the dense programs' 1e-10; the amplitudes of
+    its zeros were 1e-5 off and two of three stabilities wrong.)
+
+    Parameters
+    ----------
+    prog : FastContactProgram
+
+    Examples
+    --------
+    >>> from gaocvx.discrete import DiscreteProblem
+    >>> from gaocvx.nonconvex.fast_contact import FastContactProgram
+    >>> from gaocvx.nonconvex.modes import unstable_modes
+    >>> from gaocvx.nonconvex.node import NodeProgram
+    >>> from gaocvx import Scene
+    >>> scene = Scene.from_dict({"beam": {"model": "gao", "supports": "P4", "length": 1.0,
+    ...     "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1, "width": 1.0},
+    ...     "load": {"q": -1e8, "axial": 1.5e9}, "obstacle": {"gap": 0.01},
+    ...     "mesh": {"elements": 8}})
+    >>> dp = DiscreteProblem(scene, check_convexity=False)
+    >>> m = unstable_modes(dp)
+    >>> F, dF, u, ok = ContactSlices(FastContactProgram(dp, m)).reduced([-2.0])
+    >>> G, dG, _, _ = NodeProgram(dp, m).reduced([-2.0])    # the dense program agrees
+    >>> ok, abs(F - G) < 1e-9 * abs(G), bool(abs(dF[0] - dG[0]) < 1e-7 * abs(dG[0]))
+    (True, True, True)
+    """
+
+    def __init__(self, prog):
+        from ..contact_newton import RHO_START
+        self.prog, self.k, self.mf, self.B = prog, prog.k, prog.mf, prog.B
+        self.smin, self.smax = prog.smin, prog.smax
+        self.rho_start, self.rho_max = min(RHO_START, prog.rho), prog.rho
+        # Newton's tolerances relative to the energy, but not to less than that of an
+        # answer of the certificate's floor size (a beam lying flat at gap 0 has
+        # energy ~0), as FastContactProgram's
+        self.floor = self.mf.zero_floor ** 2 if self.mf.has_load else 1.0
+        self._cache = []   # (amplitudes, z, lam) of admissible slices: starts
+        self.solves = 0
+
+    def reduced(self, s0):
+        """``F(s0)``, its gradient ``-nu``, the free Hermite DOFs and success.
+
+        ``inf`` (and success) where no admissible beam has the amplitudes ``s0``
+        (outside the program's amplitude range, or the multipliers' updates
+        stall with the rows violated by more than ``ADMISSIBLE``).
+        """
+        from ..linalg import one_blas_thread
+        from .fast_contact import ADMISSIBLE, FEASIBLE
+
+        s0 = np.asarray(s0, float)
+        self.solves += 1
+        if np.any(s0 < self.smin) or np.any(s0 > self.smax):
+            return math.inf, np.zeros(self.k), None, True
+        target = s0 - self.prog.s_origin        # B z = s0 - s_origin (z from the origin)
+        mf = self.mf
+        starts = []
+        if self._cache:
+            # a neighbouring slice's answer at the largest penalty: its contact set
+            # differs little
+            near = min(self._cache, key=lambda e: float(np.sum((e[0] - s0) ** 2)))
+            starts.append((near[1], near[2], near[3]))
+        starts.append((-mf.origin, mf.no_contact_forces(), self.rho_start))
+        best = None
+        with one_blas_thread():   # O(N) work: BLAS threads cost more than they do
+            for z, lam, rho in starts:
+                out = self._multipliers(target, z.copy(), lam.copy(), rho)
+                if out is not None and (best is None or out[4] < best[4]):
+                    best = out
+                if best is not None and best[2] and best[4] <= FEASIBLE:
+                    break
+        if best is None or best[4] > ADMISSIBLE:
+            return math.inf, np.zeros(self.k), None, True
+        z, nu, converged, lam, violation, rho = best
+        if violation <= FEASIBLE:
+            self._cache.append((s0.copy(), z, lam, rho))
+            del self._cache[:-64]
+        F = float(sum(mf.energy_parts(z).values()))
+        return F, -nu, mf.to_hermite(z), bool(converged and violation <= FEASIBLE)
+
+    def _multipliers(self, target, z, lam, rho, updates=60, stall=5):
+        """The method of multipliers on the slice; (z, nu, converged, lam, violation, rho) or None.
+
+        When the violation stops halving at the program's largest penalty, the
+        penalty is raised a thousandfold, once: where the beam lies flat
+        on the obstacle next to a support, the active rows are linearly
+        dependent and the multipliers drift instead of converging, the violation
+        stuck at about a constant over the penalty (16 elements, P1 at gap 0:
+        4e-12 at 1e10, 6e-17 at 1e13; the slope F' was 2e-6 off at the first,
+        within 1e-8 of the dense program's at the second).  Stalled at the
+        raised penalty, or with a violation far above round-off (1e-6 of the
+        answer's size), the slice is taken as inadmissible.
+        """
+        from .fast_contact import FEASIBLE
+
+        mf = self.mf
+        history, out = [], None
+        for _ in range(updates):
+            z, nu, converged = self._newton(target, z, lam, rho)
+            if not np.all(np.isfinite(z)):
+                return out
+            gap = mf.gap(z)
+            lam = np.maximum(lam - rho * gap, 0.0)   # the slice's optimality holds with these
+            if rho < self.rho_max:
+                rho = min(1e3 * rho, self.rho_max)
+                continue
+            violation = max(-float(np.min(gap, initial=0.0)) / mf.deflection_size(z), 0.0)
+            out = (z, nu, converged, lam, violation, rho)
+            history.append(violation)
+            if violation <= FEASIBLE and converged:
+                break
+            if len(history) > stall and history[-1] > 0.5 * history[-1 - stall]:
+                # (a violation far above round-off is an inadmissible slice: no raise)
+                if rho >= 1e3 * self.rho_max or violation > 1e-6:
+                    break
+                rho, history = 1e3 * rho, []
+        return out
+
+    def _newton(self, target, z, lam, rho, max_iter=60):
+        """Damped semismooth Newton on the augmented Lagrangian over the slice.
+
+        Returns ``z``, the multipliers ``nu`` of ``B z = target`` and convergence
+        (the squared Newton decrement at round-off of the energy).
+        """
+        from .. import newton as nw
+
+        mf, B, k = self.mf, self.B, self.k
+        al = {"shift": lam, "rho": rho}
+        nu, previous = np.zeros(k), math.inf
+        for _ in range(max_iter):
+            g, H = mf.gradient(z, **al), mf.hessian(z, **al)
+            factor = mf.kkt_factor(H)
+            try:
+                r0, m0 = factor.solve(-g, -mf.link(z))
+                cols = [factor.solve(B[i], np.zeros(mf.N)) for i in range(k)]
+                X = np.column_stack([x for x, _ in cols])
+                Xmu = np.column_stack([m for _, m in cols])
+                nu = np.linalg.solve(B @ X, B @ r0 - (target - B @ z))
+            except np.linalg.LinAlgError:
+                return z, nu, False
+            d, mu = r0 - X @ nu, m0 - Xmu @ nu
+            on_slice = (np.linalg.norm(B @ z - target) <= 1e-12 * (1.0 + np.linalg.norm(target))
+                        and np.linalg.norm(mf.link(z)) <= 1e-12 * (1.0 + np.linalg.norm(z)))
+            if not on_slice:
+                z = z + d   # the constraints are linear: one full step lands on them
+                continue
+            dec = float(d @ (H @ d))   # H is positive definite on the slice
+            floor = max(abs(sum(mf.energy_parts(z).values())), self.floor)
+            if abs(dec) <= 1e-20 * floor:
+                return z, nu, True
+            if abs(dec) <= 1e-16 * floor and abs(dec) > 0.01 * previous:
+                return z, nu, True    # stagnated: round-off
+            previous = abs(dec)
+            # Along d the Lagrangian of the linear rows decreases (newton._newton):
+            # C d and B d are round-off, the forces on them are not
+            shift = float(mu @ (mf.C @ d)) + float(nu @ (B @ d))
+            slope0 = float(g @ d) + shift
+            dphi = mf.directional(z, d, **al)
+            t = nw.line_search(lambda t: dphi(t) + shift, slope0)
+            if t is None:
+                return z, nu, abs(dec) <= 1e-16 * floor
+            z = z + t * d
+        return z, nu, False
+
+
 def _convex_equilibrium(scene, elements, dp) -> list:
     from ..solve import solve
     r = solve(scene, "global", elements=elements)
@@ -167,17 +352,15 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         return _convex_equilibrium(scene, elements, dp)
     check_bounded(dp)
     n_el = dp.n_nodes - 1
-    # The fast path has no inequality constraints: an obstacle (or a channel)
-    # needs the dense programs.
-    eligible = dp.contact != "obstacle"
-    fast = eligible if fast is None else bool(fast)
-    if fast and not eligible:
-        raise SceneError("obstacle", "the fast path takes no obstacle", dp.contact)
+    obstacle = dp.contact == "obstacle"
+    # With an obstacle (or a channel) the dense programs stay the default where
+    # they serve (the ground truth), the fast path beyond them.
+    fast = (not obstacle or n_el > MAX_ELEMENTS) if fast is None else bool(fast)
     cap = MAX_FAST_ELEMENTS if fast else MAX_ELEMENTS
     if n_el > cap:
         raise SceneError("mesh.elements", f"equilibria above the convexity limit take at most "
-                         f"{MAX_ELEMENTS} elements with an obstacle (dense programs), "
-                         f"{MAX_FAST_ELEMENTS} without (fast path)", n_el)
+                         f"{MAX_FAST_ELEMENTS} elements (fast path; the dense programs, "
+                         f"fast=False, at most {MAX_ELEMENTS})", n_el)
     modes = unstable_modes(dp)
     if modes.k == 0:
         modes = unstable_modes(dp, min_k=1)
@@ -186,7 +369,10 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                          "modes; equilibria are searched for one or two (P below the third "
                          f"mode load {float(modes.loads[2]):.4g} N)", dp.P)
     dp = rescale_for(dp, modes)
-    if fast:
+    if fast and obstacle:
+        from .fast_contact import FastContactProgram
+        prog = ContactSlices(FastContactProgram(dp, modes))
+    elif fast:
         from .fast import FastProgram
         prog = FastProgram(dp, modes)
     else:
@@ -204,10 +390,10 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         # of 17 cm (the one-mode estimate's) left one grid point of 121 admissible
         # (s = 0), and two of three equilibria were missed.  The range is a linear
         # program's, its ends bounds by weak duality (:func:`.fast_check.amplitude_range`).
-        from .fast_check import amplitude_range
+        # (the fast program computes it on construction: with it, the same program)
         from .fast_contact import FastContactProgram
-        a, b = amplitude_range(FastContactProgram(dp, modes))
-        lo, hi = max(-S, float(a[0])), min(S, float(b[0]))
+        ranged = prog if fast else FastContactProgram(dp, modes)
+        lo, hi = max(-S, float(ranged.smin[0])), min(S, float(ranged.smax[0]))
     return _find(dp, prog, S, np.asarray(seeds, float) / dp.W, grid, lo, hi,
                  scene_energy(dp, modes))
 
@@ -231,17 +417,20 @@ def _find(dp, prog, S, seeds, grid, lo, hi, floor):
     # where the grid steps from infeasible to feasible, the boundary is found by
     # bisection and sampled just inside, else a beam pressed onto the obstacle
     # (a zero of F' right next to the boundary, where F' falls steeply) is missed.
-    extra = []
+    extra, ends = [], []
     for (a, va), (b, vb) in zip(vals[:-1], vals[1:]):
         if math.isfinite(va[0]) != math.isfinite(vb[0]):
             inside, outside = (b, a) if math.isfinite(vb[0]) else (a, b)
             for _ in range(40):
                 mid = 0.5 * (inside + outside)
-                if math.isfinite(dF(mid)[0]):
+                # (an inaccurate solve counts as outside: at gap 0 the fast slices
+                # accept a violation of 1e-9 as admissible but not accurate)
+                if math.isfinite(dF(mid)[0]) and dF(mid)[3]:
                     inside = mid
                 else:
                     outside = mid
             extra.append((inside, dF(inside)))
+            ends.append((inside, outside))
     vals = sorted([(s, v) for s, v in vals + extra if math.isfinite(v[0])],
                   key=lambda item: item[0])
     if not vals:
@@ -278,10 +467,30 @@ def _find(dp, prog, S, seeds, grid, lo, hi, floor):
                 refine(s_arr[i - 1], res.x)
                 refine(res.x, s_arr[i + 1])
     out = []
+    # An end of the admissible amplitudes where F rises into the range (F' > 0 at
+    # the lower end, < 0 at the upper) is a local minimum of F there, so of the
+    # energy: every admissible beam nearby has amplitudes in the range.  A beam
+    # pressed flat onto an obstacle at gap 0 is one (F(s) = 0.44 s at s >= 0 on 16
+    # elements, P4): no zero of F' marks it.  Its residual is |F'| times the
+    # bisection's bracket (the end lies in it).
+    for inside, outside in ends:
+        F, d0, u, ok = dF(inside)
+        if u is None or not (d0 > 0 if outside < inside else d0 < 0):
+            continue
+        roots = [r for r in roots if abs(r - inside) > 1e-9 * S]
+        w, slope = dp.to_physical(u)
+        size = max(sum(abs(v) for v in dp.energy_parts(u).values()), floor) or scale
+        res = abs(d0) * abs(outside - inside) / size
+        status = "optimal" if ok and res <= ROOT_TOL else "inaccurate"
+        out.append(Equilibrium(float(dp.energy(u) * dp.E0), True, [float(inside)], dp.x.copy(),
+                               w, slope, float(res), status, float(dp.P), math.nan, float(dp.W)))
     for r in sorted(set(roots)):
         if any(abs(r - e) <= 1e-9 * S for e in [q.amplitudes[0] for q in out]):
             continue
         F, d0, u, ok = dF(r)
+        if u is None:   # (a slice that failed inside the range: no beam to report)
+            log.warning("equilibria: no admissible slice at the zero s = %.17g", r)
+            continue
         h = 1e-6 * S
         left, right = dF(r - h)[1], dF(r + h)[1]
         curvature = (right - left) / (2 * h)
@@ -294,6 +503,16 @@ def _find(dp, prog, S, seeds, grid, lo, hi, floor):
         # which any residual was too large)
         size = max(sum(abs(v) for v in dp.energy_parts(u).values()), floor) or scale
         res = abs(d0) * max(abs(r), 1e-3 * S) / size
+        if res > ROOT_TOL:
+            # A kink of F (the obstacle takes or releases the beam: a beam lying flat
+            # at gap 0 between supports has F(s) = 0.55 |s| on 16 elements, P1): F'
+            # jumps through zero (upwards: F is convex but for -c s^2) and |F'| at the
+            # zero stays large.  The equilibrium lies between r - e and r + e when F'
+            # changes sign there, and the energy within |F'| 2e of F(r).
+            e = 1e-12 * S
+            a, b = dF(r - e), dF(r + e)
+            if math.isfinite(a[0]) and math.isfinite(b[0]) and a[1] * b[1] < 0:
+                res = min(res, max(abs(a[1]), abs(b[1])) * 2 * e / size)
         status = "optimal" if ok and res <= ROOT_TOL else "inaccurate"
         out.append(Equilibrium(float(dp.energy(u) * dp.E0), bool(stable), [float(r)], dp.x.copy(),
                                w, slope, float(res), status, float(dp.P), float(curvature),
