@@ -147,6 +147,9 @@ class ContactSlices:
     Parameters
     ----------
     prog : FastContactProgram
+    energy_floor : float
+        The scene's energy scale (non-dimensional, :func:`.minimum.scene_energy`):
+        a violation whose work is round-off against it is harmless (:meth:`_violation`).
 
     Examples
     --------
@@ -167,7 +170,7 @@ class ContactSlices:
     (True, True, True)
     """
 
-    def __init__(self, prog):
+    def __init__(self, prog, energy_floor: float = 0.0):
         from ..contact_newton import RHO_START
         self.prog, self.k, self.mf, self.B = prog, prog.k, prog.mf, prog.B
         self.smin, self.smax = prog.smin, prog.smax
@@ -176,6 +179,7 @@ class ContactSlices:
         # answer of the certificate's floor size (a beam lying flat at gap 0 has
         # energy ~0), as FastContactProgram's
         self.floor = self.mf.zero_floor ** 2 if self.mf.has_load else 1.0
+        self.energy_floor = float(energy_floor)
         self._cache = []   # (amplitudes, z, lam) of admissible slices: starts
         self.solves = 0
 
@@ -245,17 +249,39 @@ class ContactSlices:
             if rho < self.rho_max:
                 rho = min(1e3 * rho, self.rho_max)
                 continue
-            violation = max(-float(np.min(gap, initial=0.0)) / mf.deflection_size(z), 0.0)
+            violation = self._violation(z, gap, lam)
             out = (z, nu, converged, lam, violation, rho)
             history.append(violation)
-            if violation <= FEASIBLE and converged:
-                break
+            if violation <= FEASIBLE:
+                break   # (unconverged: more updates would not change the iterate)
             if len(history) > stall and history[-1] > 0.5 * history[-1 - stall]:
                 # (a violation far above round-off is an inadmissible slice: no raise)
                 if rho >= 1e3 * self.rho_max or violation > 1e-6:
                     break
                 rho, history = 1e3 * rho, []
         return out
+
+    def _violation(self, z, gap, lam) -> float:
+        """The rows' largest violation relative to the answer's size, or less if harmless.
+
+        Slices of tiny amplitude (a beam lifting off a flat contact: 1e-9 of the
+        buckled size, at the certificate's floor size) stall at violations of
+        1e-15 in absolute terms, round-off, but 1e-8 of their own size.  A
+        violation moves the energy by at most the work ``lam'(-gap)^+`` of the
+        forces on it: when that is at most 1e-13 of the energy scale (the
+        energy, at least the scene's ``energy_floor``) it counts as
+        ``FEASIBLE`` (and 1e-11 as ``ADMISSIBLE``: linearly in between).
+        """
+        from .fast_contact import FEASIBLE
+
+        mf = self.mf
+        over = np.maximum(-gap, 0.0)
+        relative = float(np.max(over, initial=0.0)) / mf.deflection_size(z)
+        scale = max(abs(sum(mf.energy_parts(z).values())), self.energy_floor)
+        if scale <= 0.0:
+            return relative
+        work = float(lam @ over)
+        return min(relative, FEASIBLE * work / (1e-13 * scale))
 
     def _newton(self, target, z, lam, rho, max_iter=60):
         """Damped semismooth Newton on the augmented Lagrangian over the slice.
@@ -267,7 +293,7 @@ class ContactSlices:
 
         mf, B, k = self.mf, self.B, self.k
         al = {"shift": lam, "rho": rho}
-        nu, previous = np.zeros(k), math.inf
+        nu, previous, full = np.zeros(k), math.inf, False
         for _ in range(max_iter):
             g, H = mf.gradient(z, **al), mf.hessian(z, **al)
             factor = mf.kkt_factor(H)
@@ -298,9 +324,15 @@ class ContactSlices:
             slope0 = float(g @ d) + shift
             dphi = mf.directional(z, d, **al)
             t = nw.line_search(lambda t: dphi(t) + shift, slope0)
+            if t is None and not full:
+                # No descent along d: the linear rows' residual (1e-11, against forces
+                # of 1e3 at the end of a range) outweighs the decrement.  The full
+                # step satisfies them to the solve's round-off; once.
+                z, full = z + d, True
+                continue
             if t is None:
                 return z, nu, abs(dec) <= 1e-16 * floor
-            z = z + t * d
+            z, full = z + t * d, False
         return z, nu, False
 
 
@@ -371,7 +403,7 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
     dp = rescale_for(dp, modes)
     if fast and obstacle:
         from .fast_contact import FastContactProgram
-        prog = ContactSlices(FastContactProgram(dp, modes))
+        prog = ContactSlices(FastContactProgram(dp, modes), scene_energy(dp, modes))
     elif fast:
         from .fast import FastProgram
         prog = FastProgram(dp, modes)
@@ -508,11 +540,14 @@ def _find(dp, prog, S, seeds, grid, lo, hi, floor):
             # at gap 0 between supports has F(s) = 0.55 |s| on 16 elements, P1): F'
             # jumps through zero (upwards: F is convex but for -c s^2) and |F'| at the
             # zero stays large.  The equilibrium lies between r - e and r + e when F'
-            # changes sign there, and the energy within |F'| 2e of F(r).
-            e = 1e-12 * S
-            a, b = dF(r - e), dF(r + e)
-            if math.isfinite(a[0]) and math.isfinite(b[0]) and a[1] * b[1] < 0:
-                res = min(res, max(abs(a[1]), abs(b[1])) * 2 * e / size)
+            # changes sign there, and the energy within |F'| 2e of F(r).  (The
+            # slices of amplitudes 1e-12 from a flat beam's are round-off: wider
+            # windows after the narrowest.)
+            for e in (1e-12 * S, 1e-10 * S, 1e-9 * S):
+                a, b = dF(r - e), dF(r + e)
+                if math.isfinite(a[0]) and math.isfinite(b[0]) and a[1] * b[1] < 0:
+                    res = min(res, max(abs(a[1]), abs(b[1])) * 2 * e / size)
+                    break
         status = "optimal" if ok and res <= ROOT_TOL else "inaccurate"
         out.append(Equilibrium(float(dp.energy(u) * dp.E0), bool(stable), [float(r)], dp.x.copy(),
                                w, slope, float(res), status, float(dp.P), float(curvature),
