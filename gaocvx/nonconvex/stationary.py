@@ -207,10 +207,16 @@ class ContactSlices:
             starts.append((near[1], near[2], near[3]))
         starts.append((-mf.origin, mf.no_contact_forces(), self.rho_start))
         best = None
+
+        def rank(out):
+            return (not (out[2] and out[4] <= FEASIBLE), out[4])
         with one_blas_thread():   # O(N) work: BLAS threads cost more than they do
             for z, lam, rho in starts:
                 out = self._multipliers(target, z.copy(), lam.copy(), rho)
-                if out is not None and (best is None or out[4] < best[4]):
+                # a converged feasible answer first, then the least violation (a
+                # warm start that did not converge once left F' = +24 for -36 in
+                # a Brent bracket: a false zero)
+                if out is not None and (best is None or rank(out) < rank(best)):
                     best = out
                 if best is not None and best[2] and best[4] <= FEASIBLE:
                     break
