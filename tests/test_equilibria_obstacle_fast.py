@@ -155,3 +155,19 @@ def test_energies_converge_with_the_mesh_on_the_fast_path():
     diffs = np.abs(np.diff(energies))
     order = -np.polyfit(np.log([64, 128, 256]), np.log(diffs), 1)[0]
     assert 3.7 < order < 4.3, (order, diffs)
+
+
+@pytest.mark.slow
+def test_two_unstable_modes_with_an_obstacle():
+    """k = 2 (P1 above its second mode load, q = -5e7 N/m, an obstacle 1 cm below):
+    the plane search on the contact slices finds the dense programs' equilibria
+    (measured: two, 9 s against 22 s)."""
+    scene = Scene.from_dict(scene_dict("P1", q=-5e7, axial=1.1e10, obstacle=0.01, elements=16))
+    dense, fast = equilibria(scene, fast=False), equilibria(scene, fast=True)
+    assert len(dense) == len(fast) == 2
+    scale = max(abs(e.energy) for e in dense)
+    S = max(np.linalg.norm(e.amplitudes) for e in dense)
+    for f, e in zip(fast, dense):
+        assert f.stable == e.stable and f.status == e.status == "optimal"
+        assert abs(f.energy - e.energy) <= 1e-8 * max(abs(e.energy), 1e-6 * scale)
+        assert np.linalg.norm(np.subtract(f.amplitudes, e.amplitudes)) <= 1e-7 * S

@@ -6,7 +6,12 @@ given amplitudes ``s`` of the unstable modes the energy is strictly convex in
 the rest, so ``v*(s)`` is unique: the equilibria are exactly the stationary
 points of the reduced function ``F(s) = min_v Psi(s, v) - c s^2``
 (nonconvex.md), whose derivative comes with each fixed-amplitude solve
-(:meth:`.node.NodeProgram.reduced`, envelope theorem).  So:
+(envelope theorem): :meth:`.node.NodeProgram.reduced` (dense, the ground
+truth, at most ``minimum.MAX_ELEMENTS``), :meth:`.fast.FastProgram.reduced`
+(banded, no obstacle) or, with an obstacle or channel beyond the dense
+programs, :class:`ContactSlices` (banded, on a
+:class:`.fast_contact.FastContactProgram`), both up to
+``api.MAX_FAST_ELEMENTS``.  So:
 
 1. every equilibrium has its amplitude in ``[-S, S]`` (:func:`.bounds.equilibrium_box`);
 2. ``F'`` is sampled on a grid over it (and at ``seeds``, e.g. the previous
@@ -16,7 +21,10 @@ points of the reduced function ``F(s) = min_v Psi(s, v) - c s^2``
 3. each zero is classified: ``F'' > 0`` (``F'`` rising through zero, or a
    kink from negative to positive, where an obstacle starts to hold the
    beam) is a local minimum of the energy (stable); ``F'' < 0`` an unstable
-   equilibrium (for k = 1: a local maximum of ``F``).
+   equilibrium (for k = 1: a local maximum of ``F``);
+4. with an obstacle, an end of the admissible amplitudes where ``F`` rises
+   into the range is a local minimum of the energy too (stable): a beam
+   pressed flat onto an obstacle at gap 0.
 
 Below the limit (k = 0) the one equilibrium is the convex minimiser.
 
@@ -73,7 +81,10 @@ class Equilibrium:
     x, w, slope : ndarray
         Nodes [m], deflection [m], slope.
     residual : float
-        ``|F'(s)| |s|`` relative to the energy scale (0 for the convex case).
+        ``|F'(s)| |s|`` relative to the energy scale (0 for the convex case);
+        at a kink of ``F`` or an end of the admissible amplitudes (an obstacle
+        holding the beam), ``|F'|`` times the width of the bracket that holds
+        the equilibrium.
     status : str
         "optimal" when the fixed-amplitude solve and the zero are accurate,
         else "inaccurate".
@@ -365,10 +376,12 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         Grid points over the amplitude range.
     fast : bool, optional
         The reduced function through the banded Newton machinery
-        (:class:`.fast.FastProgram`, any mesh up to ``api.MAX_FAST_ELEMENTS``)
+        (:class:`.fast.FastProgram`; with an obstacle or channel
+        :class:`ContactSlices`; any mesh up to ``api.MAX_FAST_ELEMENTS``)
         instead of the dense CVXPY programs (:class:`.node.NodeProgram`, the
-        ground truth, at most ``minimum.MAX_ELEMENTS``); by default wherever it
-        serves: without an obstacle.
+        ground truth, at most ``minimum.MAX_ELEMENTS``).  By default the fast
+        path without an obstacle; with one the dense programs up to
+        ``minimum.MAX_ELEMENTS`` elements and the fast path beyond.
 
     Returns
     -------
@@ -378,7 +391,8 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
     ------
     SceneError
         For scenes with more than two unstable modes, without a minimiser, or
-        on too fine a mesh.
+        on too fine a mesh (above ``api.MAX_FAST_ELEMENTS`` elements, or above
+        ``minimum.MAX_ELEMENTS`` with ``fast=False``).
     """
     from .api import MAX_FAST_ELEMENTS, provably_convex
     from .minimum import MAX_ELEMENTS, rescale_for, scene_energy
