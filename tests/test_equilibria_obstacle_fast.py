@@ -85,7 +85,8 @@ def test_narrow_channel_beyond_the_dense_programs():
     once missed by the grid) at 136 elements, beyond the dense programs: held at the
     ceiling, held on the floor (both stable) and w = 0 (unstable)."""
     scene = _scene(q=0.0, axial=4.5552e9, gap=0.002, above=0.003, elements=136)
-    with pytest.raises(SceneError, match="2048"):
+    from gaocvx.nonconvex.minimum import MAX_ELEMENTS
+    with pytest.raises(SceneError, match=f"fast=False, at most {MAX_ELEMENTS}"):
         equilibria(scene, fast=False)           # the dense programs stop at 128
     eqs = equilibria(scene)
     assert [e.status for e in eqs] == ["optimal"] * 3
