@@ -290,7 +290,8 @@ class NodeProgram:
         """The reduced function ``F(s0)``, its gradient, the minimiser ``u`` and the solve's status.
 
         ``F(s0) = min_v Psi(s0, v) - sum c_i s0_i^2`` (the energy's minimum over
-        the complement at these amplitudes); ``dF = d Psi/ds - 2 c s0`` with
+        the complement at these amplitudes, ``c_i = (p - lambda_i) / 2``);
+        ``dF = d Psi/ds - 2 c s0`` with
         ``d Psi/ds`` the multiplier of ``s == s0`` (envelope theorem).
 
         Returns
@@ -301,7 +302,10 @@ class NodeProgram:
         ok : bool
         """
         s0 = np.asarray(s0, float)
-        c = self.modes.c
+        # The program's Psi is Pi + sum (p - lambda_i) / 2 s_i^2 exactly (A_rho's form
+        # on the complement), not with the c_i, which carry a margin
+        # (:attr:`Modes.c`): that is subtracted.
+        c = (self.modes.p - self.modes.lam) / 2.0
         self.s0.value = s0
         status, _ = self._solve(self.fixed_problem)
         if status not in ("optimal", "optimal_inaccurate"):
