@@ -31,10 +31,12 @@ log = logging.getLogger(__name__)
 # Branch and bound splits a k-dimensional box: beyond a few modes the number of
 # node programs explodes (measured: 1 mode ~50 nodes, 2 modes ~500).
 MAX_MODES = 3
-# The fast path (up to three modes, no obstacle) beyond the dense programs' 128
-# elements, up to here: measured at 2048 elements, P4 with one mode in 5 s, P1 with
-# two in 54 s (one thread); at 8192 the sparse eigen-solve's vectors fail their check.
-MAX_FAST_ELEMENTS = 2048
+# The fast path (up to three modes) beyond the dense programs' 128 elements, up to
+# here: measured at 2048 elements, P4 with one mode in 5 s, P1 with two in 54 s (one
+# thread); at 8192, P4 with one mode in 24 s.  Beyond, the Hermite pencil's Sturm
+# count (modecheck) and the node programs lose their accuracy (at 32768 elements
+# node programs failed; at 16384 the count moved lambda_3 by 1e-3 of itself).
+MAX_FAST_ELEMENTS = 8192
 # The continuum P_bar lies below P_bar_h (Rayleigh-Ritz); below this fraction of it
 # no mesh needs a look (EFFECTIVE_LENGTH of P2 is 2e-6 off the exact root).
 _CONTINUUM_MARGIN = 1e-4

@@ -93,7 +93,7 @@ class BnBResult:
 
 
 def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
-                     start=None, leaves=None) -> BnBResult:
+                     start=None, leaves=None, time_limit: float = TIME_LIMIT) -> BnBResult:
     """Minimise the energy over the box ``[lo, hi]`` of amplitudes, to a certified gap ``tol``.
 
     Parameters
@@ -117,11 +117,13 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
         their bounds hold here too, so the search goes on from them instead of
         from the whole box.  Those whose bound is within reach of the best energy
         are solved again (their bound is kept if higher).
+    time_limit : float
+        Seconds before the search stops (``converged = False``).
     """
     c = np.asarray(prog.modes.c, float)
     # A wall-clock limit: with constraints each node is a solve of its own, and a
     # gap that closes slowly must end as an uncertified answer, not a hang.
-    deadline = time.perf_counter() + TIME_LIMIT
+    deadline = time.perf_counter() + time_limit
     best = list(start) if start is not None else [math.inf, None, None, None]
     counter = itertools.count()
     nodes = 0

@@ -74,6 +74,11 @@ ENERGY_FLOOR = 1.0
 # nonconvex.md's example: 1e-12 of the energy at 64 elements, 1.2e-8 at 128, where
 # a node program took 1 s; GAP_TOL is 1e-8).
 MAX_ELEMENTS = 128
+# A node program's cost grows with the mesh (banded solves in the fast path), and
+# so does the branch and bound's wall-clock limit: bnb.TIME_LIMIT per TIME_ELEMENTS
+# elements (measured at 8192 elements on a loaded machine: 2 to 10 s a node, and
+# every scene stopped at 120 s with 13 to 31 of its 40 to 60 nodes).
+TIME_ELEMENTS = 2048
 # Two minimisers are distinct when their deflections differ by more than this,
 # relative to the larger one's G-norm (sqrt ∫ (w')^2).
 DISTINCT = 1e-6
@@ -209,13 +214,22 @@ def _polish(dp, prog, s, u, lam, lo, hi):
         # only the complement.  The node program on a tiny box around s has the
         # full problem's optimality conditions up to its chord error c delta^2:
         # its minimiser and multipliers are those of the beam.
+        # Its minimiser off the box's centre leaves a gradient error of c times the
+        # offset, so the box is centred on it and narrowed while it moves (a P1 beam
+        # in a channel, k = 2, 256 elements: stationarity 1.4e-6 from one box).
         delta = 1e-7 * (1.0 + float(np.max(np.abs(s))))
-        sol = prog.solve_box(np.maximum(s - delta, lo), np.minimum(s + delta, hi))
         # (its energy may exceed the reduced minimum's by the solver's tolerance;
         # contact_polish then brings it down again)
         e = dp.energy(u)
-        if sol.ok and sol.u is not None and dp.energy(sol.u) <= e + slack:
+        for _ in range(3):
+            sol = prog.solve_box(np.maximum(s - delta, lo), np.minimum(s + delta, hi))
+            if not (sol.ok and sol.u is not None and dp.energy(sol.u) <= e + slack):
+                break
+            moved = float(np.max(np.abs(sol.s - s)))
             s, u, lam = sol.s, sol.u, sol.lam
+            if moved <= 0.01 * delta:
+                break
+            delta *= 0.1
         if lam is not None:   # (dense; the fast path's own polish at any N)
             u, lam = getattr(prog, "contact_polish", contact_polish)(dp, u, lam, prog.rows,
                                                                      prog.levels)
@@ -235,6 +249,11 @@ def _polish(dp, prog, s, u, lam, lo, hi):
             and dp.energy(polished) <= dp.energy(u) + 1e-12 * parts:
         return s, polished, np.zeros(prog.rows.shape[0])
     return s, u, lam
+
+
+def time_limit(dp) -> float:
+    """The branch and bound's wall-clock limit [s] on the mesh of ``dp`` (TIME_ELEMENTS)."""
+    return bnb.TIME_LIMIT * max(1.0, (dp.n_nodes - 1) / TIME_ELEMENTS)
 
 
 def _reflections(dp, u) -> list:
@@ -362,7 +381,8 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     floor = ENERGY_FLOOR * scene_energy(dp, modes)
     scale = max(sum(abs(v) for v in dp.energy_parts(start[1]).values()), floor, 1e-300)
     out = branch_and_bound(prog, _feasible_energy(dp, prog), lo, hi, GAP_TARGET * scale,
-                           max_nodes, start, leaves=None if prior is None else prior[0])
+                           max_nodes, start, leaves=None if prior is None else prior[0],
+                           time_limit=time_limit(dp))
     if out.s is None:
         out.s = start[2]
     best_s, best_u, lam = _polish(dp, prog, out.s, out.u, out.lam, lo, hi)
@@ -447,7 +467,7 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
              f"({gap / scale:.2g} of the energy scale)"]
     if not out.converged:
         notes.append(f"stopped at {out.nodes} nodes (limit {max_nodes} nodes, "
-                     f"{bnb.TIME_LIMIT:g} s)")
+                     f"{time_limit(dp):g} s)")
     if out.failed:
         notes.append(f"{out.failed} node programs not solved to optimality")
     if not modes.verified:
