@@ -2,7 +2,7 @@
 
 Beyond the dense programs' 128 elements ``equilibria`` takes the reduced
 function from exact amplitude slices of the fast contact program's mixed form
-(:class:`gaocvx.nonconvex.stationary.ContactSlices`).  References from outside
+(:class:`gaocvx.nonconvex.slices.ContactSlices`).  References from outside
 the code under test: the dense CVXPY + Clarabel programs on small meshes (the
 ground truth: count, stability, energies, amplitudes), the obstacle's and the
 channel's geometry (a beam held at the floor or the ceiling), the flat beam's

@@ -10,7 +10,8 @@ buckling modes (``../shared/spec/nonconvex.md``, docs/nonconvex.md):
 ``bnb``        branch and bound with a certified gap
 ``minimum``    the global minimiser, polished and certified
 ``api``        ``solve(scene, "global")``'s results
-``stationary`` every equilibrium for one unstable mode (zeros of F'(s))
+``stationary`` every equilibrium for one unstable mode (zeros of F'(s));
+               ``stationary2`` for two, ``slices`` F(s) with an obstacle
 ``path``       equilibrium paths against the axial force
 """
 
