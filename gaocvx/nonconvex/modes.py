@@ -63,8 +63,9 @@ MARGIN = 1e-8
 # the sparse solve.
 MAX_DENSE_DOFS = 1200
 # Largest relative residual |r_i|_{K^-1} / |phi_i|_K accepted of a computed mode.
-# Evaluated in the Hermite DOFs it is dominated by their round-off on fine meshes
-# (measured on P4: 2e-7 at 512 elements, 4e-5 at 2048, 5e-3 at 8192).
+# Its measure includes the bound of its own round-off (modecheck.residual_gram),
+# which dominates on fine meshes: P4 measured 3e-5 at 1024 elements, 2.6e-4 at 8192
+# and 1e-3 at 32768.  (Evaluated in the Hermite DOFs it was 5e-3 at 8192.)
 RESIDUAL_TOL = 1e-3
 # The sparse solve's vectors are refined (:func:`.modecheck.inverse_iteration`)
 # until their relative residuals are below REFINE_TOL, in at most REFINE_STEPS steps.
