@@ -11,7 +11,16 @@ every zero is found, so this search is a careful sampling, not a proof:
    differences of the envelope gradient), damped to stay in the square;
 3. zeros are merged when closer than 1e-6 S; each is classified by the
    eigenvalues of its Hessian: both positive is a local minimum of the energy
-   (stable), else unstable (a saddle or a maximum of F).
+   (stable), else unstable (a saddle or a maximum of F);
+4. with an obstacle or channel, a local minimum of ``F`` at a kink or at the
+   edge of the admissible amplitudes (a beam pressed flat onto an obstacle at
+   gap 0) is no zero of ``∇F``: every grid point whose ``F`` is lowest among
+   its admissible neighbours is refined by Nelder-Mead on ``F`` (inadmissible
+   amplitudes count as ``+inf``) and, when it is no zero found by step 2,
+   reported as a stable equilibrium if no admissible probe around it within
+   1e-9 S is lower (a local minimum of ``F`` is one of the energy:
+   ``Pi(s, v) >= F(s) >= F(s*)`` nearby).  Unstable equilibria at a kink or
+   an edge are not searched.
 
 Examples
 --------
@@ -42,8 +51,12 @@ log = logging.getLogger(__name__)
 GRID2 = 25  # odd: (0, 0) is a grid point
 
 
-def find_plane(dp, prog, S, grid: int = GRID2) -> list:
-    """Every zero of ``∇F`` found in ``[-S, S]^2`` (see the module's notes)."""
+def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0) -> list:
+    """Every zero of ``∇F`` found in ``[-S, S]^2`` (see the module's notes).
+
+    ``floor`` [in the program's energy unit]: the smallest energy scale residuals are
+    relative to (the scene's: a flat beam's own energy parts are 0).
+    """
     t0 = time.perf_counter()
     cache = {}
 
@@ -104,7 +117,7 @@ def find_plane(dp, prog, S, grid: int = GRID2) -> list:
         if math.isfinite(grad(s)[0]) and not any(np.linalg.norm(s - r) <= 1e-6 * S
                                                   for r in roots):
             roots.append(s)
-    out = []
+    out = _edge_minima(dp, grad, axis, S, roots, floor) if dp.contact == "obstacle" else []
     for r in roots:
         F, d, u, ok = grad(r)
         size = sum(abs(v) for v in dp.energy_parts(u).values()) or 1.0
@@ -120,4 +133,57 @@ def find_plane(dp, prog, S, grid: int = GRID2) -> list:
     out.sort(key=lambda e: e.energy)
     log.info("equilibria (k = 2): %d found from %d seeds, %d solves in %.2f s", len(out),
              len(seeds), len(cache), time.perf_counter() - t0)
+    return out
+
+
+def _edge_minima(dp, grad, axis, S, roots, floor) -> list:
+    """Stable equilibria at a kink or an edge of the admissible amplitudes (step 4).
+
+    Without them a beam pressed flat onto an obstacle at gap 0 with two unstable
+    modes had no equilibrium at all (campaign draws: P1 and P4 in a channel with
+    gap 0, both methods returned an empty list).  Their residual is ``|∇F|``
+    times the probes' radius relative to the energy scale, as for k = 1.
+    """
+    import scipy.optimize as so
+
+    n = len(axis)
+    F = np.array([[grad(np.array([a, b]))[0] for b in axis] for a in axis])
+    F = np.where(np.isfinite(F), F, np.inf)
+    out = []
+
+    def f(s):
+        if np.any(np.abs(s) > S):
+            return math.inf
+        v = grad(np.asarray(s, float))[0]
+        return v if math.isfinite(v) else math.inf
+
+    for i in range(n):
+        for j in range(n):
+            if not math.isfinite(F[i, j]) or \
+                    F[i, j] > F[max(i - 1, 0):i + 2, max(j - 1, 0):j + 2].min():
+                continue
+            h = axis[1] - axis[0]
+            s0 = np.array([axis[i], axis[j]])
+            simplex = np.array([s0, s0 + [0.5 * h, 0.0], s0 + [0.0, 0.5 * h]])
+            res = so.minimize(f, s0, method="Nelder-Mead",
+                              options=dict(initial_simplex=simplex, xatol=1e-12 * S,
+                                           fatol=0.0, maxiter=400))
+            s = np.asarray(res.x, float)
+            if not math.isfinite(f(s)) or \
+                    any(np.linalg.norm(s - r) <= 1e-6 * S for r in roots) or \
+                    any(np.linalg.norm(s - np.asarray(e.amplitudes)) <= 1e-6 * S for e in out):
+                continue
+            F0, d, u, ok = grad(s)
+            e = 1e-9 * S
+            probes = [f(s + e * np.array([math.cos(t), math.sin(t)]))
+                      for t in np.linspace(0, 2 * math.pi, 8, endpoint=False)]
+            if min(probes) < F0:
+                continue   # (not a minimum at this resolution: a zero of ∇F is step 2's)
+            size = max(sum(abs(v) for v in dp.energy_parts(u).values()), floor) or 1.0
+            resid = float(np.linalg.norm(d)) * e / size
+            status = "optimal" if ok and resid <= ROOT_TOL else "inaccurate"
+            w, slope = dp.to_physical(u)
+            out.append(Equilibrium(float(dp.energy(u) * dp.E0), True, [float(x) for x in s],
+                                   dp.x.copy(), w, slope, resid, status, float(dp.P),
+                                   math.nan, float(dp.W)))
     return out
