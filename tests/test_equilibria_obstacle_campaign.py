@@ -260,3 +260,19 @@ def test_fast_and_dense_equilibria_against_the_independent_energy(seed):
         bad += [(case.id, v) for v in rec["violations"]
                 if v.startswith("fast") or v.startswith("missed by fast")]
     assert not bad, bad
+
+
+@pytest.mark.parametrize("draw", [
+    40,   # P3 pressed flat at gap 0: the dense programs returned 3e-12 m, stationarity 5e4
+    70,   # gap 2e-5 m: stationarity 11
+    32,   # w = 0 returned as 1e-13 m: stationarity 1.4e-3
+])
+def test_the_dense_programs_call_no_deflection_optimal_that_is_no_kkt_point(draw):
+    """The dense programs (``fast=False``; the fallback of a failed slice) reported
+    deflections `optimal` by their reduced gradient alone, no KKT points of the
+    independent energy; each is now checked as the global method's answers are
+    (stationarity, feasibility, multipliers, complementarity) and is `inaccurate`
+    when that fails."""
+    rec = run(_draw(1, draw), methods=("dense",))
+    kkt = [v for v in rec["violations"] if "kkt" in v or "energy" in v]
+    assert not kkt, kkt
