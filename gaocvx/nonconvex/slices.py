@@ -33,12 +33,12 @@ class ContactSlices:
     multipliers ``max(0, lam - rho gap)``, so ``-nu`` is the gradient of
     the slice problem with the obstacle moved by at most that violation.
 
-    (``prog.reduced`` solves the node problem on the degenerate box
-    ``[s0, s0]`` instead and reads the gradient from the box rows'
-    augmented-Lagrangian multipliers: their accuracy is the box penalty times
-    the rows' last violation, measured 1e-5 of ``F'``'s range at 16 elements
-    (untouched obstacle), against the dense programs' 1e-10; the amplitudes of
-    its zeros were 1e-5 off and two of three stabilities wrong.)
+    (The node problem on the degenerate box ``[s0, s0]``, which read the
+    gradient from the box rows' augmented-Lagrangian multipliers, was 1e-5 of
+    ``F'``'s range off at 16 elements (untouched obstacle), against the dense
+    programs' 1e-10; the amplitudes of its zeros were 1e-5 off and two of three
+    stabilities wrong.  ``prog.reduced`` is this class now.)  ``F`` is the
+    Lagrangian ``E - lam'gap`` at the answer, whose exact gradient ``-nu`` is.
 
     Parameters
     ----------
@@ -78,6 +78,7 @@ class ContactSlices:
         self.energy_floor = float(energy_floor)
         self._cache = []   # (amplitudes, z, lam) of admissible slices: starts
         self.solves = 0
+        self.lam = None    # the obstacle rows' multipliers of the last admissible slice
 
     def reduced(self, s0):
         """``F(s0)``, its gradient ``-nu``, the free Hermite DOFs and success.
@@ -119,10 +120,16 @@ class ContactSlices:
         if best is None or best[4] > ADMISSIBLE:
             return math.inf, np.zeros(self.k), None, True
         z, nu, converged, lam, violation, rho = best
+        self.lam = lam
         if violation <= FEASIBLE:
             self._cache.append((s0.copy(), z, lam, rho))
             del self._cache[:-64]
-        F = float(sum(mf.energy_parts(z).values()))
+        # F as the Lagrangian E - lam'gap with the multipliers that make z stationary:
+        # -nu is its exact gradient (envelope theorem), and the energy alone differs
+        # from it by the forces' work on the rows' tolerances, which moves with the
+        # start (a P1 beam in a channel, 256 elements: the same s twice gave F 4.5e-12
+        # apart, relative, and L-BFGS-B stopped 1e-5 off the minimiser on such noise)
+        F = float(sum(mf.energy_parts(z).values())) - float(lam @ mf.gap(z))
         return F, -nu, mf.to_hermite(z), bool(converged and violation <= FEASIBLE)
 
     def _multipliers(self, target, z, lam, rho, updates=60, stall=5):
@@ -152,9 +159,14 @@ class ContactSlices:
                 rho = min(1e3 * rho, self.rho_max)
                 continue
             violation = self._violation(z, gap, lam)
-            out = (z, nu, converged, lam, violation, rho)
+            # Feasible is not yet optimal: a warm start's forces may hold the beam
+            # on rows it would leave (P1 at gap 0, 16 elements, from the slice at
+            # s = -1 to -0.3: no row violated, F 2e-6 and F' 1e-6 too high).  The
+            # updates go on until the forces' work on open gaps is round-off too.
+            settled = self._complementary(z, gap, lam)
+            out = (z, nu, converged and settled, lam, violation, rho)
             history.append(violation)
-            if violation <= FEASIBLE:
+            if violation <= FEASIBLE and settled:
                 break   # (unconverged: more updates would not change the iterate)
             if len(history) > stall and history[-1] > 0.5 * history[-1 - stall]:
                 # (a violation far above round-off is an inadmissible slice: no raise)
@@ -184,6 +196,16 @@ class ContactSlices:
             return relative
         work = float(lam @ over)
         return min(relative, FEASIBLE * work / (1e-13 * scale))
+
+    def _complementary(self, z, gap, lam) -> bool:
+        """Whether the forces' work ``lam'(gap)^+`` on open gaps is round-off.
+
+        At most 1e-13 of the energy scale (the energy, at least the scene's
+        ``energy_floor``; the energy's Newton tolerance when both are 0), as
+        :meth:`_violation` takes the work on closed ones.
+        """
+        scale = max(abs(sum(self.mf.energy_parts(z).values())), self.energy_floor, self.floor)
+        return float(lam @ np.maximum(gap, 0.0)) <= 1e-13 * scale
 
     def _newton(self, target, z, lam, rho, max_iter=60):
         """Damped semismooth Newton on the augmented Lagrangian over the slice.
