@@ -151,3 +151,23 @@ def test_an_image_within_the_gap_that_is_no_equilibrium_is_not_reported():
     rec = run_case(Case(data, ("P1", "obstacle", "table"), "1:66"), starts=12, seed=66)
     assert not rec["violations"], rec["violations"]
     assert rec["status"] == "optimal" and rec["unique"], rec.get("message")
+
+
+@pytest.mark.slow
+def test_a_candidate_inside_the_obstacle_is_not_taken_by_the_polish():
+    """Campaign scene 11:31 (96 elements): a P1 beam held at w = 0 by an obstacle at
+    gap 0, just above the limit.  The search's best point was w = 0; the polish took a
+    reduced minimiser 3.4e-12 inside the obstacle (1e-5 of its own size, energy
+    -1.5e-12) as lower, and the answer failed its certificate (`inaccurate`).
+    Candidates are now judged by their admissible energy: w = 0, certified, and the
+    independent checker agrees."""
+    data = {"beam": {"model": "gao", "supports": "P1", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                     "half_thickness": 0.1, "width": 1.0},
+            "load": {"points": [[0.3088462454748173, -11944517.970276581],
+                                [0.9657011133088972, -4360499.741007901]],
+                     "axial": 4676963613.00729},
+            "mesh": {"elements": 96}, "obstacle": {"gap": 0.0}}
+    from campaign import Case
+    rec = run_case(Case(data, ("P1", "obstacle", "points"), "11:31"), starts=4, seed=31)
+    assert not rec["violations"], rec["violations"]
+    assert rec["status"] == "optimal", rec.get("message")

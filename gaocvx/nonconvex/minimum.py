@@ -205,7 +205,12 @@ def _polish(dp, prog, s, u, lam, lo, hi):
     # contact): a feasible polished point is taken within GAP_TOL of it (the gap
     # is computed from the point returned, so it stays honest).
     slack = GAP_TOL * max(abs(dp.energy(u)), 1.0) if dp.contact == "obstacle" else 0.0
-    if u2 is not None and dp.energy(u2) <= dp.energy(u) + slack:
+    # (judged by the admissible energy: a point that violates an obstacle beyond
+    # round-off is no candidate; at gap 0 one 3.4e-12 inside, 1e-5 of its own size,
+    # was taken for w = 0 and failed its certificate, campaign scene 11:31 at 96
+    # elements)
+    feasible = _feasible_energy(dp, prog)
+    if u2 is not None and feasible(u2) <= dp.energy(u) + slack:
         s, u = s2, u2
         lam = prog.obstacle_multipliers()
     if dp.contact == "obstacle":
@@ -223,7 +228,7 @@ def _polish(dp, prog, s, u, lam, lo, hi):
         e = dp.energy(u)
         for _ in range(3):
             sol = prog.solve_box(np.maximum(s - delta, lo), np.minimum(s + delta, hi))
-            if not (sol.ok and sol.u is not None and dp.energy(sol.u) <= e + slack):
+            if not (sol.ok and sol.u is not None and feasible(sol.u) <= e + slack):
                 break
             moved = float(np.max(np.abs(sol.s - s)))
             s, u, lam = sol.s, sol.u, sol.lam
