@@ -1,14 +1,15 @@
 """The global method above the convexity limit: cost against certified gap and mesh size, and paths.
 
     python benchmarks/nonconvex.py table [--output docs/nonconvex-benchmark.md]
-    OPENBLAS_NUM_THREADS=1 python benchmarks/nonconvex.py fine [--output FILE]
+    OPENBLAS_NUM_THREADS=1 python benchmarks/nonconvex.py fine [--output FILE] [--sizes ...] [--cases ...]
     python benchmarks/nonconvex.py paths [--output docs/nonconvex-paths.png] [--elements 12]
 
 ``table``: for each scene and mesh, the global method's run time, node
 programs, unstable modes and certified gap (in J and relative to the energy
 scale, the sum of |energy parts|), with its status, by the dense node
 programs.  ``fine``: the same by the fast path (:mod:`gaocvx.nonconvex.fast`)
-for nonconvex.md's P4 example and the k = 2 P1 example at 128 to 2048 elements
+for nonconvex.md's P4 example, the k = 2 P1 example and the P4 obstacle example
+(``--cases``) at 128 to 8192 elements (``--sizes``)
 (one BLAS thread: on a shared machine OpenBLAS's threads made a dot product
 of 10^4 numbers take 24 ms instead of 6 us).  ``paths``: the
 equilibrium path of each support (P1..P4) with and without a transverse load,
@@ -120,11 +121,16 @@ def main(argv=None):
     ap.add_argument("what", choices=["table", "fine", "paths"])
     ap.add_argument("--output")
     ap.add_argument("--elements", type=int, default=12)
+    ap.add_argument("--sizes", default="128,512,2048,8192",
+                    help="fine: the meshes (comma-separated element counts)")
+    ap.add_argument("--cases", default="0,2,5",
+                    help="fine: indices into CASES (default: P4, P1 with k = 2, P4 on an obstacle)")
     args = ap.parse_args(argv)
     if args.what == "table":
         table(args.output)
     elif args.what == "fine":
-        table(args.output, [CASES[0], CASES[2]], (128, 512, 2048), fast=True)
+        cases = [CASES[int(i)] for i in args.cases.split(",")]
+        table(args.output, cases, tuple(int(n) for n in args.sizes.split(",")), fast=True)
     else:
         paths(args.output or "docs/nonconvex-paths.png", args.elements)
 
