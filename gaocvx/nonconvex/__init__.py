@@ -8,7 +8,8 @@ buckling modes (``../shared/spec/nonconvex.md``, docs/nonconvex.md):
                of energies unbounded below
 ``node``       the convex node programs (dense CVXPY + Clarabel, DPP)
 ``bnb``        branch and bound with a certified gap
-``minimum``    the global minimiser, polished and certified
+``minimum``    the global minimiser, certified (``polish``: the answer
+               polished, its images)
 ``api``        ``solve(scene, "global")``'s results
 ``stationary`` every equilibrium for one unstable mode (zeros of F'(s));
                ``stationary2`` for two, ``slices`` F(s) with an obstacle

@@ -44,7 +44,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..mixed import MixedForm
-from .minimum import to_mixed
+from .polish import to_mixed
 from .node import NodeSolution
 
 __all__ = ["FastProgram", "box_qp"]

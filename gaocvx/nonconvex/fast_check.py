@@ -120,7 +120,7 @@ def contact_polish(prog, u, lam):
     elements.)
     """
     from ..contact_newton import _iterate
-    from .minimum import to_mixed
+    from .polish import to_mixed
 
     mf = prog.mf
     floor = mf.zero_floor if mf.has_load else 0.0

@@ -13,7 +13,7 @@ Steps (nonconvex.md):
 5. branch and bound (:mod:`.bnb`) to a certified gap of
    :data:`GAP_TARGET` of the energy scale (sum of |energy parts|, at least the
    scene's own energy, :func:`scene_energy`);
-6. polishing: the reduced function ``F(s)`` minimised from the best point
+6. polishing (:mod:`.polish`): the reduced function ``F(s)`` minimised from the best point
    (L-BFGS-B with its envelope gradient), then, without an obstacle, Newton on
    the full energy; the energy only goes down, so the certificate stands;
 7. other minimisers: every other group of leaves whose lower bound lies
@@ -42,7 +42,6 @@ import math
 import time
 
 import numpy as np
-import scipy.optimize as so
 
 from ..errors import SceneError
 from ..mixed import MixedForm
@@ -50,9 +49,10 @@ from ..newton import answer, certify, passes
 from . import bnb
 from .bnb import branch_and_bound, components
 from .bounds import amplitude_box, check_bounded, load_constant
-from .certificate import certify_contact, contact_polish
+from .certificate import certify_contact
 from .modes import unstable_modes
 from .node import NodeProgram
+from .polish import feasible_energy, polish, reflections, to_mixed
 
 __all__ = ["solve_global", "GAP_TOL", "GAP_TARGET", "MAX_ELEMENTS", "to_mixed", "rescale_for"]
 
@@ -86,17 +86,6 @@ TIME_ELEMENTS = 2048
 DISTINCT = 1e-6
 
 
-def to_mixed(mf: MixedForm, u) -> np.ndarray:
-    """Mixed variables ``z`` (relative to ``mf.origin``) of free Hermite DOFs ``u``."""
-    dp = mf.dp
-    full = dp.full(u)
-    w = full[0::2]
-    zf = np.zeros(mf.nz)
-    zf[0::3], zf[1::3] = w, full[1::2]
-    zf[2::3] = np.diff(w) / np.diff(dp.xi)
-    return zf[mf.free] - mf.origin
-
-
 def one_mode_amplitude(dp, modes) -> float:
     """The one-mode estimate ``A`` of the buckled amplitude (non-dimensional, G-normalised)."""
     slopes = dp.B1 @ modes.phi[:, 0]
@@ -126,177 +115,9 @@ def rescale_for(dp, modes):
     return dp.rescaled(dp.W * size) if size > 1.0 else dp
 
 
-def _newton_polish(dp, u, max_iter: int = 30):
-    """Newton on the full energy from ``u`` (no obstacle) in the mixed variables; the new ``u``.
-
-    Only used near a minimiser (the Hessian must be positive definite there:
-    the Gao term stiffens a buckled beam); a step must not raise the energy
-    beyond round-off, else the last point stands.  The mixed form, not the
-    Hermite DOFs: their Hessian loses N^4 eps (measured: a polished answer
-    1.3e-6 off at 2048 elements, which the certificate then rejected).
-    """
-    mf = MixedForm(dp)
-    z = to_mixed(mf, u)
-    energy = lambda z: sum(mf.energy_parts(z).values())  # noqa: E731
-    e = energy(z)
-    for _ in range(max_iter):
-        g = mf.gradient(z)
-        H = mf.hessian(z)
-        try:
-            d, _ = mf.kkt_factor(H).solve(-g, -mf.link(z))
-        except np.linalg.LinAlgError:
-            break
-        dec = float(d @ (H @ d))
-        if not dec >= 0:   # not positive definite here: no Newton step
-            break
-        trial = z + d
-        et = energy(trial)
-        if not et <= e + 1e-12 * max(abs(e), 1.0):
-            break
-        z, e = trial, et
-        if dec <= 1e-28 * max(abs(e), 1.0):
-            break
-    return mf.to_hermite(z)
-
-
-def _minimise_reduced(prog, s, lo, hi):
-    """Minimise the reduced function F over ``[lo, hi]`` from ``s``; returns (F, s, u, ok)."""
-    cache = {}
-
-    def fun(x):
-        key = tuple(x)
-        if key not in cache:
-            cache[key] = prog.reduced(x)
-        F, dF, _, _ = cache[key]
-        if not math.isfinite(F):
-            # No admissible beam has these amplitudes (an obstacle bounds them):
-            # a huge value makes the line search step back.
-            return 1e30, np.zeros_like(x)
-        return F, dF
-
-    res = so.minimize(fun, np.clip(s, lo, hi), jac=True, method="L-BFGS-B",
-                      bounds=list(zip(lo, hi)), options=dict(ftol=1e-15, gtol=1e-11, maxiter=60))
-    F, _, u, ok = prog.reduced(res.x)
-    return F, np.asarray(res.x, float), u, ok
-
-
-def _feasible_energy(dp, prog):
-    """The energy of free DOFs ``u``; inf where an obstacle is violated beyond round-off."""
-    if prog.rows is None:
-        return getattr(prog, "energy", dp.energy)
-
-    base = getattr(prog, "energy", dp.energy)   # the fast path's: in the mixed form
-
-    def energy(u):
-        gap = prog.rows @ u - prog.levels
-        size = max(float(np.max(np.abs(u))), float(np.max(np.abs(prog.levels))), 1e-300)
-        return base(u) if np.min(gap, initial=0.0) >= -1e-9 * size else math.inf
-
-    return energy
-
-
-def _polish(dp, prog, s, u, lam, lo, hi):
-    """Polish a candidate: the reduced function's minimum near ``s``, then Newton.
-
-    Returns the amplitudes, free DOFs and obstacle multipliers of one and the
-    same solve.
-    """
-    out = _polish_with(dp, prog, s, u, lam, lo, hi, dp.energy)
-    if dp.contact == "obstacle" and _violates(dp, prog, out[1]):
-        # A candidate inside the obstacle, taken for its lower energy, that the
-        # contact polish could not bring out: again, with candidates judged by
-        # their admissible energy.  (At gap 0 one 3.4e-12 inside, 1e-5 of its own
-        # size, replaced the search's w = 0: campaign scene 11:31 at 96 elements.
-        # Not always so judged: node answers inside by the solver's tolerance are
-        # what the contact polish starts from, campaign scene 1:38.)
-        log.info("global: the polished point violates the obstacle; again, by admissible "
-                 "energies")
-        out = _polish_with(dp, prog, s, u, lam, lo, hi, _feasible_energy(dp, prog))
-    return out
-
-
-def _violates(dp, prog, u) -> bool:
-    """``u`` lies inside the obstacle by more than 1e-9 of its size (at least the
-    zero floor of the certificate, :attr:`MixedForm.zero_floor`: a beam pressed
-    flat at gap 0 has no size of its own)."""
-    mf = MixedForm.on_obstacle(dp)
-    floor = mf.zero_floor if mf.has_load else 0.0
-    gap = prog.rows @ u - prog.levels
-    size = max(float(np.max(np.abs(u))), float(np.max(np.abs(prog.levels))), floor, 1e-300)
-    return float(np.min(gap, initial=0.0)) < -1e-9 * size
-
-
-def _polish_with(dp, prog, s, u, lam, lo, hi, judge):
-    """:func:`_polish` with candidates taken when ``judge(candidate)`` is lower."""
-    F, s2, u2, ok = _minimise_reduced(prog, s, lo, hi)
-    # A node's answer may violate an obstacle by the solver's tolerance, which
-    # lowers its energy by force x violation (measured: 3e-9 of it for a point
-    # contact): a feasible polished point is taken within GAP_TOL of it (the gap
-    # is computed from the point returned, so it stays honest).
-    slack = GAP_TOL * max(abs(dp.energy(u)), 1.0) if dp.contact == "obstacle" else 0.0
-    if u2 is not None and judge(u2) <= dp.energy(u) + slack:
-        s, u = s2, u2
-        lam = prog.obstacle_multipliers()
-    if dp.contact == "obstacle":
-        # At a minimiser in contact, F is often not differentiable (the contact
-        # starts there), and the fixed-amplitude program's multipliers balance
-        # only the complement.  The node program on a tiny box around s has the
-        # full problem's optimality conditions up to its chord error c delta^2:
-        # its minimiser and multipliers are those of the beam.
-        # Its minimiser off the box's centre leaves a gradient error of c times the
-        # offset, so the box is centred on it and narrowed while it moves (a P1 beam
-        # in a channel, k = 2, 256 elements: stationarity 1.4e-6 from one box).
-        delta = 1e-7 * (1.0 + float(np.max(np.abs(s))))
-        # (its energy may exceed the reduced minimum's by the solver's tolerance;
-        # contact_polish then brings it down again)
-        e = dp.energy(u)
-        for _ in range(3):
-            sol = prog.solve_box(np.maximum(s - delta, lo), np.minimum(s + delta, hi))
-            if not (sol.ok and sol.u is not None and judge(sol.u) <= e + slack):
-                break
-            moved = float(np.max(np.abs(sol.s - s)))
-            s, u, lam = sol.s, sol.u, sol.lam
-            if moved <= 0.01 * delta:
-                break
-            delta *= 0.1
-        if lam is not None:   # (dense; the fast path's own polish at any N)
-            u, lam = getattr(prog, "contact_polish", contact_polish)(dp, u, lam, prog.rows,
-                                                                     prog.levels)
-    polished = _newton_polish(dp, u)
-    if dp.contact != "obstacle":
-        return s, polished, lam
-    # With an obstacle, Newton without it serves when the beam lifts off
-    # everywhere: the answer stays feasible and its multipliers are zero.
-    gap = prog.rows @ polished - prog.levels
-    reach = max(float(np.max(np.abs(polished))), float(np.max(np.abs(prog.levels))))
-    # (the energy compared up to round-off of its parts: just above P_bar_h bending
-    # and axial terms of 6e-3 cancel to -1.5e-8, and the polished point, 9e-17
-    # "higher", was refused for an unpolished one with stationarity 1.2e-6 that
-    # failed the certificate: campaign scene 1:52)
-    parts = sum(abs(v) for v in dp.energy_parts(u).values())
-    if np.min(gap, initial=np.inf) > 1e-9 * reach \
-            and dp.energy(polished) <= dp.energy(u) + 1e-12 * parts:
-        return s, polished, np.zeros(prog.rows.shape[0])
-    return s, u, lam
-
-
 def time_limit(dp) -> float:
     """The branch and bound's wall-clock limit [s] on the mesh of ``dp`` (TIME_ELEMENTS)."""
     return bnb.TIME_LIMIT * max(1.0, (dp.n_nodes - 1) / TIME_ELEMENTS)
-
-
-def _reflections(dp, u) -> list:
-    """``u`` mirrored in x -> L - x, and its negative ([] unless mesh and supports allow it)."""
-    x = dp.xi
-    if not np.allclose(x[::-1], x[-1] - x, rtol=0.0, atol=1e-12 * x[-1]):
-        return []
-    full = dp.full(u)
-    r = np.empty_like(full)
-    r[0::2], r[1::2] = full[0::2][::-1], -full[1::2][::-1]
-    fixed = np.setdiff1d(np.arange(len(full)), dp.free)
-    if np.any(r[fixed] != 0):   # (P2, P3: the supports are not symmetric)
-        return []
-    return [r[dp.free], -r[dp.free]]
 
 
 def fast_eligible(dp, k: int) -> bool:
@@ -404,7 +225,7 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
         if u is not None and dp.energy(u) < start[0]:
             start = (dp.energy(u), u, s, prog.obstacle_multipliers())
     if prior is not None:
-        e = _feasible_energy(dp, prog)(prior[1])
+        e = feasible_energy(dp, prog)(prior[1])
         if e < start[0]:
             start = (e, prior[1], prior[2], prior[3])
     # lambda_1 of (K, G) bounds u'K u / t; with a bonded foundation the modes are
@@ -413,12 +234,12 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     lo, hi = amplitude_box(dp, k, upper=start[0], lam1=lam1)
     floor = ENERGY_FLOOR * scene_energy(dp, modes)
     scale = max(sum(abs(v) for v in dp.energy_parts(start[1]).values()), floor, 1e-300)
-    out = branch_and_bound(prog, _feasible_energy(dp, prog), lo, hi, GAP_TARGET * scale,
+    out = branch_and_bound(prog, feasible_energy(dp, prog), lo, hi, GAP_TARGET * scale,
                            max_nodes, start, leaves=None if prior is None else prior[0],
                            time_limit=time_limit(dp))
     if out.s is None:
         out.s = start[2]
-    best_s, best_u, lam = _polish(dp, prog, out.s, out.u, out.lam, lo, hi)
+    best_s, best_u, lam = polish(dp, prog, out.s, out.u, out.lam, lo, hi)
     best_e = dp.energy(best_u)
     tol = max(out.gap, GAP_TARGET * scale)
 
@@ -432,7 +253,7 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
         if np.all(glo <= best_s) and np.all(best_s <= ghi):
             continue
         seed = min(group, key=lambda leaf: leaf.lower)
-        s2, u2, lam2 = _polish(dp, prog, seed.s, seed.u, None, glo, ghi)
+        s2, u2, lam2 = polish(dp, prog, seed.s, seed.u, None, glo, ghi)
         e2 = dp.energy(u2)
         if e2 > best_e + tol:
             continue
@@ -456,15 +277,15 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     # 2e-7 m from symmetric) has an image within the gap that is no equilibrium;
     # polished, it falls back onto the answer (campaign scene 1:66).
     # An exact image (a symmetric scene) is kept as it is, else the polished point.
-    feasible = _feasible_energy(dp, prog)
-    for u2 in [-best_u] + _reflections(dp, best_u):
+    feasible = feasible_energy(dp, prog)
+    for u2 in [-best_u] + reflections(dp, best_u):
         e2 = feasible(u2)
         known = [best_u] + [a[1] for a in alternatives]
         if not e2 <= best_e + tol or any(norm(u2 - x) <= DISTINCT * norm(best_u)
                                          for x in known):
             continue
         s_img = modes.phi.T @ (dp.G @ u2)
-        s2, p2, lam2 = _polish(dp, prog, s_img, u2, None, lo, hi)
+        s2, p2, lam2 = polish(dp, prog, s_img, u2, None, lo, hi)
         if any(norm(p2 - x) <= DISTINCT * norm(best_u) for x in known):
             continue   # no minimiser of its own: it falls back onto a known one
         if norm(p2 - u2) <= DISTINCT * norm(best_u):

@@ -104,7 +104,7 @@ def ritz(K, G, V) -> tuple[np.ndarray, np.ndarray]:
 def _mixed(dp, V):
     """The mixed form, ``V``'s mixed variables, and ``V'K V``, ``V'G V`` from first differences."""
     from ..mixed import MixedForm
-    from .minimum import to_mixed
+    from .polish import to_mixed
 
     mf = MixedForm(dp)
     Z = np.column_stack([to_mixed(mf, V[:, i]) for i in range(V.shape[1])])
