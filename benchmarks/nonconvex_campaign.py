@@ -61,7 +61,7 @@ def parse_elements(text):
 
 
 class SolveTimeout(Exception):
-    """The global solve ran past --solve-limit seconds (recorded as a crash with this name)."""
+    """The global solve ran past --solve-limit seconds (recorded as status "timeout")."""
 
 
 def _limited(limit):
@@ -211,7 +211,7 @@ def table(records, shor_rows, command, elapsed, elements=None) -> str:
     # inaccurate, refused, slow
     for title, pick in (("Inaccurate answers (not certified; honest, but a user gets no answer)",
                          lambda r: r["status"] == "inaccurate"),
-                        ("Refusals", lambda r: r["status"] in ("refused", "error")),
+                        ("Refusals", lambda r: r["status"] in ("refused", "error", "timeout")),
                         (f"Slow solves (> {SLOW:g} s)", lambda r: r["time_s"] > SLOW)):
         rows = [r for r in records if pick(r)]
         out += [f"## {title}: {len(rows)}", ""]

@@ -29,7 +29,8 @@ apart from gaocvx, local searches with scipy.optimize), and the rules are:
   ``MAX_MODES`` unstable modes (counted independently) or a mesh beyond the
   documented 8192 elements (the fast path's; the dense node programs stop at 128); any other refusal is a violation, and so is an
   Euler-Bernoulli answer above its limit;
-* ``crash``: any exception other than SceneError / SolverError;
+* ``crash``: any exception other than SceneError / SolverError (a solve stopped
+  by the campaign's own ``--solve-limit`` is recorded as ``timeout``, no violation);
 * ``slow``: more than ``SLOW`` seconds (reported, not a violation of
   correctness).
 
@@ -190,6 +191,11 @@ def run_case(case: Case, starts: int = 24, seed: int = 0) -> dict:
     except SolverError as exc:
         r, rec["status"], rec["message"] = None, "error", str(exc)
     except Exception as exc:  # noqa: BLE001 - a crash is what the campaign looks for
+        if type(exc).__name__ == "SolveTimeout":  # the campaign's --solve-limit, not gaocvx's
+            r, rec["status"], rec["message"] = None, "timeout", str(exc)
+            rec["notes"].append(f"timeout: {exc}")
+            rec["time_s"] = time.perf_counter() - t0
+            return rec
         r, rec["status"] = None, "crash"
         rec["message"] = "".join(traceback.format_exception_only(type(exc), exc)).strip()
         rec["violations"].append(("crash", rec["message"]))
