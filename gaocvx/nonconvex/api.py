@@ -85,7 +85,7 @@ def solve_global_result(scene, elements=None, problem=None, solver=None):
     from ..solve import _solve_exact, make_result
     from .bounds import check_bounded
     from .minimum import MAX_ELEMENTS, fast_by_default, fast_eligible, solve_global
-    from .modes import unstable_modes
+    from .modes import MAX_UNSTABLE, unstable_modes
 
     t0 = time.perf_counter()
     if problem is not None:
@@ -105,7 +105,9 @@ def solve_global_result(scene, elements=None, problem=None, solver=None):
                          f"path {MAX_FAST_ELEMENTS}", n_el)
     modes = unstable_modes(dp)
     if modes.k > MAX_MODES:
-        raise SceneError("load.axial", f"{_statement(dp)}, with {modes.k} unstable buckling modes; "
+        # (the count stops past MAX_UNSTABLE: then it is a lower bound)
+        count = f"more than {MAX_UNSTABLE}" if modes.k > MAX_UNSTABLE else str(modes.k)
+        raise SceneError("load.axial", f"{_statement(dp)}, with {count} unstable buckling modes; "
                          f"the global method's branch and bound takes at most {MAX_MODES}", dp.P)
     if modes.k == 0:
         # Not provably below the limit, yet the eigen-solve puts lambda_1 a hair above

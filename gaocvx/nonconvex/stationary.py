@@ -177,7 +177,7 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
     """
     from .api import MAX_FAST_ELEMENTS, provably_convex
     from .minimum import MAX_ELEMENTS, rescale_for, scene_energy
-    from .modes import unstable_modes
+    from .modes import MAX_UNSTABLE, unstable_modes
     from .node import NodeProgram
 
     dp = DiscreteProblem(scene, elements=elements, check_convexity=False)
@@ -202,7 +202,8 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
     if modes.k == 0:
         modes = unstable_modes(dp, min_k=1)
     if modes.k > 2:
-        raise SceneError("load.axial", f"P = {dp.P:.4g} N leaves {modes.k} unstable buckling "
+        count = f"more than {MAX_UNSTABLE}" if modes.k > MAX_UNSTABLE else str(modes.k)
+        raise SceneError("load.axial", f"P = {dp.P:.4g} N leaves {count} unstable buckling "
                          "modes; equilibria are searched for one or two (P below the third "
                          f"mode load {float(modes.loads[2]):.4g} N)", dp.P)
     dp = rescale_for(dp, modes)
