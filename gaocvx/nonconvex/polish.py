@@ -142,7 +142,7 @@ def _violates(dp, prog, u) -> bool:
 
 
 def _polish_with(dp, prog, s, u, lam, lo, hi, judge):
-    """:func:`_polish` with candidates taken when ``judge(candidate)`` is lower."""
+    """:func:`polish` with candidates taken when ``judge(candidate)`` is lower."""
     F, s2, u2, ok = _minimise_reduced(prog, s, lo, hi)
     # (a point inside the obstacle by the solver's tolerance is taken within SLACK:
     # the gap is computed from the point returned, so it stays honest)
