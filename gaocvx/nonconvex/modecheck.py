@@ -101,20 +101,40 @@ def ritz(K, G, V) -> tuple[np.ndarray, np.ndarray]:
     return vals, V @ Y
 
 
+def _slope_rows(mf):
+    """The structure holding the slope rows ``B1`` (5-point Gauss) of ``mf``'s mesh.
+
+    ``G`` is the form of the axial term, ``∫ (w')^2``, and the pencil needs it
+    whatever the energy holds.  A mesh's structure is built for the energy
+    (:func:`gaocvx.mixed.structure_key`): without the Gao term and at P = 0
+    (an Euler-Bernoulli beam, or ``E_alpha = 0``, probed for its modes at P = 0
+    by :func:`.path.characteristic_point`) it has no slope rows.  Then the same
+    mesh's structure with them: the mixed variables are the same.
+    """
+    if mf.has_slope:
+        return mf.structure
+    from ..mixed import MixedStructure, structure_key
+
+    supports, _, _, contact = structure_key(mf.dp)
+    return MixedStructure(mf.dp.xi, supports, True, contact)
+
+
 def _mixed(dp, V):
-    """The mixed form, ``V``'s mixed variables, and ``V'K V``, ``V'G V`` from first differences."""
+    """The mixed form, ``V``'s mixed variables, ``V'K V`` and ``V'G V`` from first differences,
+    and the structure with the slope rows (:func:`_slope_rows`)."""
     from ..mixed import MixedForm
     from .polish import to_mixed
 
     mf = MixedForm(dp)
+    rows = _slope_rows(mf)
     Z = np.column_stack([to_mixed(mf, V[:, i]) for i in range(V.shape[1])])
-    kappa, slopes = mf.B2 @ Z, mf.B1 @ Z
+    kappa, slopes = mf.B2 @ Z, rows.B1 @ Z
     Kr = kappa.T @ (mf.wq2[:, None] * kappa)
     if dp.contact == "foundation" and dp.bilateral:
         w = dp.Nq @ V
         Kr = Kr + w.T @ (np.broadcast_to(dp.c * dp.wq_c, dp.wq_c.shape)[:, None] * w)
-    Gr = slopes.T @ (mf.wq5[:, None] * slopes)
-    return mf, Z, 0.5 * (Kr + Kr.T), 0.5 * (Gr + Gr.T)
+    Gr = slopes.T @ (rows.wq5[:, None] * slopes)
+    return mf, Z, 0.5 * (Kr + Kr.T), 0.5 * (Gr + Gr.T), rows
 
 
 def accurate_ritz(dp, V) -> tuple[np.ndarray, np.ndarray]:
@@ -127,7 +147,7 @@ def accurate_ritz(dp, V) -> tuple[np.ndarray, np.ndarray]:
     bonded foundation's ``c M`` is added from the deflections at its
     quadrature points.
     """
-    _, _, Kr, Gr = _mixed(dp, V)
+    _, _, Kr, Gr, _ = _mixed(dp, V)
     vals, Y = la.eigh(Kr, Gr)
     return vals, V @ Y
 
@@ -158,8 +178,8 @@ def inverse_iteration(dp, V) -> np.ndarray:
     shrinks the error in mode i by ``lambda_i / lambda_j`` of the first
     vector ``j`` left out of the subspace, at the cost of banded solves.
     """
-    mf, Z, _, _ = _mixed(dp, V)
-    Y = _stiffness_solve(mf, dp, mf.B1T @ (mf.wq5[:, None] * (mf.B1 @ Z)))
+    mf, Z, _, _, rows = _mixed(dp, V)
+    Y = _stiffness_solve(mf, dp, rows.B1T @ (rows.wq5[:, None] * (rows.B1 @ Z)))
     return np.column_stack([mf.to_hermite(Y[:, i]) for i in range(Y.shape[1])])
 
 
@@ -184,8 +204,8 @@ def residual_gram(dp, phi, lam) -> tuple[np.ndarray, np.ndarray, float]:
     """
     if phi.shape[1] == 0:
         return np.zeros((0, 0)), np.zeros((0, 0)), 0.0
-    mf, Z, Kr, Gr = _mixed(dp, phi)
-    Gz = mf.B1T @ (mf.wq5[:, None] * (mf.B1 @ Z))
+    mf, Z, Kr, Gr, rows = _mixed(dp, phi)
+    Gz = rows.B1T @ (rows.wq5[:, None] * (rows.B1 @ Z))
     X = Gz.T @ _stiffness_solve(mf, dp, Gz)
     X = 0.5 * (X + X.T)
     L = np.diag(lam)
