@@ -58,7 +58,7 @@ from .cache import LRU
 from .mixed import MixedForm, structure_key
 from .newton import answer, certify, passes, shortfall
 
-__all__ = ["solve_convex", "ConvexProgram"]
+__all__ = ["solve_convex", "ConvexProgram", "log_outcome"]
 
 log = logging.getLogger(__name__)
 
@@ -332,7 +332,7 @@ def _program(mf: MixedForm, solver: str, reuse: bool) -> tuple[ConvexProgram, bo
 
 
 def solve_convex(dp: DiscreteProblem, solver: str = "clarabel", verbose: bool = False,
-                 reuse: bool = False) -> dict:
+                 reuse: bool = False, *, final: bool = True) -> dict:
     """Solve the discrete scene with CVXPY.
 
     Parameters
@@ -343,6 +343,12 @@ def solve_convex(dp: DiscreteProblem, solver: str = "clarabel", verbose: bool = 
     reuse : bool
         Keep the compiled (parametric) program and reuse it for later scenes
         of the same structure (sweeps over load, gap, stiffness, tension).
+    final : bool
+        The caller returns this answer as it is, so an answer that is not
+        certified is logged as a WARNING.  False when the caller may replace
+        it by another attempt (a re-solve in the answer's own scale): it is
+        then logged at INFO, and the caller reports the answer it finally
+        returns with :func:`log_outcome`.
 
     Returns
     -------
@@ -374,20 +380,26 @@ def solve_convex(dp: DiscreteProblem, solver: str = "clarabel", verbose: bool = 
         # vector that is exactly zero, never a quadratic form that rounds to zero.
         z = np.zeros(mf.n)
         lam = mf.no_contact_forces()
-        return answer(mf, z, lam, certify(mf, z, lam),
-                      "no load: w = 0 is the exact minimiser (every energy term is >= 0 and "
-                      "vanishes there); the solver was not called", 0, solver, t0, reused=False)
+        raw = answer(mf, z, lam, certify(mf, z, lam),
+                     "no load: w = 0 is the exact minimiser (every energy term is >= 0 and "
+                     "vanishes there); the solver was not called", 0, solver, t0, reused=False)
+        log_outcome(raw, final)
+        return raw
     if mf.contact_out_of_reach:
         # A foundation or obstacle provably below anything the beam reaches costs
         # nothing: the contact-free program is solved and its answer certified on
         # the problem with the contact (numbers of the size of a far gap in the
         # program's constraints would make Clarabel fail).
-        free = solve_convex(dp.without_contact(), solver, verbose, reuse)
+        # The contact-free answer is not the one returned (it is certified again,
+        # with the contact): its verdict is logged here, not as final.
+        free = solve_convex(dp.without_contact(), solver, verbose, reuse, final=False)
         lam = mf.no_contact_forces()
         z = mf.on_manifold(free["z"])
-        return answer(mf, z, lam, certify(mf, z, lam),
-                      free["message"] + f"; the {dp.contact} is out of the beam's reach",
-                      free["nit"], solver, t0, reused=free["reused"])
+        raw = answer(mf, z, lam, certify(mf, z, lam),
+                     free["message"] + f"; the {dp.contact} is out of the beam's reach",
+                     free["nit"], solver, t0, reused=free["reused"])
+        log_outcome(raw, final)
+        return raw
     program, reused = _program(mf, solver, reuse)
     if solver == "osqp":
         attempts = [dict(solver=cp.OSQP, **s) for s in OSQP_LADDER]
@@ -395,18 +407,23 @@ def solve_convex(dp: DiscreteProblem, solver: str = "clarabel", verbose: bool = 
         kind = "obstacle" if dp.contact == "obstacle" else "smooth"
         attempts = [dict(solver=cp.CLARABEL, **s) for s in _explicit(CLARABEL_LADDER[kind])]
     best = None
-    for kwargs in attempts:
+    # Rungs tried so far: an answer certified at rung k replaced k - 1 answers
+    # logged as not certified, and says so (log_outcome).
+    tried = 0
+    for rung, kwargs in enumerate(attempts, start=1):
+        more = rung < len(attempts)
+        tried = rung
         with warnings.catch_warnings():
             # An inaccurate solve is reported through the status below, not as a warning.
             warnings.simplefilter("ignore", UserWarning)
             try:
                 program.problem.solve(verbose=verbose, **kwargs)
             except cp.error.SolverError as exc:
-                log.info("%s failed at settings %s: %s", solver, kwargs, exc)
+                log.info("%s failed at settings %s: %s%s", solver, kwargs, exc, _next(more))
                 continue
         status = program.problem.status
         if program.z.value is None or status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
-            log.info("%s returned %s at settings %s", solver, status, kwargs)
+            log.info("%s returned %s at settings %s%s", solver, status, kwargs, _next(more))
             continue
         z = mf.on_manifold(program.z.value)
         lam = (None if program.obstacle is None
@@ -419,7 +436,8 @@ def solve_convex(dp: DiscreteProblem, solver: str = "clarabel", verbose: bool = 
             best = attempt
         if passes(best[3]):
             break
-        log.info("%s answer at settings %s not certified; tightening", solver, kwargs)
+        log.info("%s answer at settings %s not certified (%s)%s", solver, kwargs,
+                 _measures(attempt[3]), _next(more))
     if best is None:
         raise SolverError(f"{solver} returned no solution (status {program.problem.status!r})",
                           program.problem.status or "error")
@@ -427,11 +445,65 @@ def solve_convex(dp: DiscreteProblem, solver: str = "clarabel", verbose: bool = 
     # The status comes from the optimality conditions of the discrete problem
     # itself (a certificate independent of the solver's internal scaling); the
     # solver's own label is kept in the message.
-    measures = ", ".join(f"{k}={v:.2e}" for k, v in residual.items())
+    measures = _measures(residual)
     if passes(residual):
         message = f"{solver} status {status!r}; optimality conditions verified ({measures})"
     else:
         message = f"{solver} status {status!r}; optimality conditions NOT met ({measures})"
-        log.warning("convex solve not certified optimal: %s", message)
     nit = getattr(program.problem.solver_stats, "num_iters", None)
-    return answer(mf, z, lam, residual, message, nit, solver, t0, reused=reused)
+    raw = answer(mf, z, lam, residual, message, nit, solver, t0, reused=reused)
+    log_outcome(raw, final, replaced=tried - 1)
+    return raw
+
+
+def _measures(residual: dict) -> str:
+    return ", ".join(f"{k}={v:.2e}" for k, v in residual.items())
+
+
+def _next(more: bool) -> str:
+    return "; the next settings follow" if more else "; no settings left"
+
+
+def log_outcome(raw: dict, final: bool = True, replaced: int = 0) -> None:
+    """Log the verdict on a convex answer: a WARNING only for one returned uncertified.
+
+    An attempt that a later one replaces (a tighter rung of the solver's
+    settings, a re-solve in the answer's own scale) is no answer the user
+    gets: its failure is logged at INFO, and a WARNING would contradict the
+    certified status the user sees next.
+
+    Parameters
+    ----------
+    raw : dict
+        The result of :func:`solve_convex` (its ``status`` and ``message``).
+    final : bool
+        Whether ``raw`` is the answer returned to the user.  False: an answer
+        that is not certified is logged at INFO, saying that the caller may try
+        again.
+    replaced : int
+        Attempts that came before this answer and were not certified: a
+        certified answer says at INFO that it replaced them.
+
+    Examples
+    --------
+    >>> import sys
+    >>> show = logging.StreamHandler(sys.stdout)
+    >>> show.setFormatter(logging.Formatter("%(levelname)s %(message)s"))
+    >>> log.addHandler(show); log.setLevel(logging.INFO)
+    >>> log_outcome({"status": "inaccurate", "message": "NOT met"}, final=False)
+    INFO convex answer not certified (NOT met); not final: the caller may solve again
+    >>> log_outcome({"status": "optimal", "message": "verified"}, replaced=1)
+    INFO convex solve certified, replacing 1 earlier attempt not certified: verified
+    >>> log_outcome({"status": "inaccurate", "message": "NOT met"})
+    WARNING convex solve not certified optimal: NOT met
+    >>> log.removeHandler(show); log.setLevel(logging.NOTSET)
+    """
+    if raw["status"] == "optimal":
+        if replaced:
+            log.info("convex solve certified, replacing %d earlier attempt%s not certified: %s",
+                     replaced, "" if replaced == 1 else "s", raw["message"])
+    elif final:
+        log.warning("convex solve not certified optimal: %s", raw["message"])
+    else:
+        log.info("convex answer not certified (%s); not final: the caller may solve again",
+                 raw["message"])

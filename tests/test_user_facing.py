@@ -1,0 +1,103 @@
+"""What a new user meets first: log messages that agree with the result, the
+top-level exports, the pictures of equilibria."""
+
+import logging
+
+import pytest
+
+from conftest import scene_dict
+from gaocvx import DiscreteProblem, Scene, solve
+from gaocvx.convex import log_outcome, solve_convex
+
+
+# ---------------------------------------------------------------- convex warnings
+
+def _records(caplog, level):
+    return [r for r in caplog.records if r.name.startswith("gaocvx") and r.levelno == level]
+
+
+def _tip_on_obstacle(force: float) -> Scene:
+    """A Gao cantilever pressed by a tip force onto a rigid obstacle 1 mm below.
+
+    With this force the convex program's first answer, in the deflection
+    scale of the free beam (~100 times the 1 mm it ends at), is not
+    certified; with -1e8 N the re-solve in the answer's own scale certifies,
+    with -1e9 N it does not either (found by trying forces and gaps, Clarabel
+    0.11, 16 elements).
+    """
+    return Scene.from_dict(scene_dict("P3", q=None, points=[(1.0, force)], axial=1e6,
+                                      obstacle=0.001, elements=16))
+
+
+def test_log_outcome_warns_only_for_a_final_uncertified_answer(caplog):
+    caplog.set_level(logging.DEBUG, logger="gaocvx")
+    bad = {"status": "inaccurate", "message": "optimality conditions NOT met"}
+    good = {"status": "optimal", "message": "optimality conditions verified"}
+
+    log_outcome(bad, final=False)
+    assert not _records(caplog, logging.WARNING)
+    (info,) = _records(caplog, logging.INFO)
+    assert "NOT met" in info.getMessage() and "may solve again" in info.getMessage()
+
+    caplog.clear()
+    log_outcome(good, replaced=2)
+    assert not _records(caplog, logging.WARNING)
+    (info,) = _records(caplog, logging.INFO)
+    assert "certified, replacing 2 earlier attempts" in info.getMessage()
+
+    caplog.clear()
+    log_outcome(good)   # certified at the first attempt: nothing to say
+    assert not caplog.records
+
+    caplog.clear()
+    log_outcome(bad)
+    (warning,) = _records(caplog, logging.WARNING)
+    assert "not certified optimal" in warning.getMessage()
+
+
+def test_solve_convex_warns_only_when_its_answer_is_final(caplog):
+    """An uncertified answer that the caller may replace is an INFO, a final one a WARNING."""
+    caplog.set_level(logging.INFO, logger="gaocvx")
+    dp = DiscreteProblem(_tip_on_obstacle(-1e8))
+    raw = solve_convex(dp, final=False)
+    if raw["status"] == "optimal":
+        pytest.skip("this Clarabel certifies the first-scale answer: the scene reproduces nothing")
+    assert not _records(caplog, logging.WARNING)
+    # Every rung but the last says another follows; the outcome says it is not final.
+    messages = [r.getMessage() for r in _records(caplog, logging.INFO)]
+    assert sum("the next settings follow" in m for m in messages) >= 1
+    assert "no settings left" in messages[-2]
+    assert "not final" in messages[-1] and raw["message"] in messages[-1]
+
+    caplog.clear()
+    raw = solve_convex(dp)   # the default: the caller returns it as it is
+    assert raw["status"] == "inaccurate"
+    (warning,) = _records(caplog, logging.WARNING)
+    assert raw["message"] in warning.getMessage()
+
+
+# solve() re-solves a convex answer in its own deflection scale (solve._solve_exact),
+# which calls solve_convex with final=True: the first, replaced attempt still warns.
+# These pass once _solve_exact passes final=False and logs the answer it returns
+# with convex.log_outcome.
+NEEDS_SOLVE = pytest.mark.xfail(strict=True, reason="gaocvx/solve.py: _solve_exact must call "
+                                "solve_convex(final=False) and log_outcome(raw, ...) at its end")
+
+
+@NEEDS_SOLVE
+def test_no_warning_when_the_returned_convex_answer_is_certified(caplog):
+    caplog.set_level(logging.INFO, logger="gaocvx")
+    result = solve(_tip_on_obstacle(-1e8), "convex")
+    assert result.status == "optimal", result.message
+    assert not _records(caplog, logging.WARNING)
+    assert any("certified, replacing" in r.getMessage() for r in _records(caplog, logging.INFO))
+
+
+@NEEDS_SOLVE
+def test_one_warning_for_a_returned_uncertified_convex_answer(caplog):
+    caplog.set_level(logging.INFO, logger="gaocvx")
+    result = solve(_tip_on_obstacle(-1e9), "convex")
+    if result.status == "optimal":
+        pytest.skip("this Clarabel certifies the scene: nothing uncertified to report")
+    (warning,) = _records(caplog, logging.WARNING)
+    assert result.message in warning.getMessage()
