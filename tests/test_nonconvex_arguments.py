@@ -19,7 +19,7 @@ import pytest
 
 from gaocvx import DiscreteProblem, Scene, solve
 from gaocvx.errors import SceneError
-from gaocvx.nonconvex import equilibrium_path, unstable_modes
+from gaocvx.nonconvex import equilibria, equilibrium_path, unstable_modes
 
 # The trial's beam: EI = 2.1e11 * 0.1 * 0.02^3 / 12 = 1.4e4 N m^2, L = 3 m.
 EB = {"beam": {"model": "euler-bernoulli", "supports": "P4", "length": 3.0, "E": 2.1e11,
@@ -94,3 +94,87 @@ def test_euler_bernoulli_path_above_the_limit_lists_the_refused_forces():
         solve(scene.with_overrides({"load.axial": 1.5 * EULER}), "global")
     assert path.errors[1.5 * EULER] == str(refused.value)
     assert "no minimiser" in path.errors[3.0 * EULER]
+
+
+# --------------------------------------------------------------- argument checks
+
+BAD_ELEMENTS = [2.5, True, "8", 0, -4, np.float64(2.5), [8]]
+
+
+@pytest.mark.parametrize("elements", BAD_ELEMENTS, ids=repr)
+def test_equilibria_and_path_check_elements_as_solve_does(elements):
+    scene = eb_scene()
+    with pytest.raises(SceneError) as by_solve:
+        solve(scene, elements=elements)
+    for call in (lambda: equilibria(scene, elements=elements),
+                 lambda: equilibrium_path(scene, [0.0], elements=elements)):
+        with pytest.raises(SceneError) as exc:
+            call()
+        assert exc.value.key == "elements" and str(exc.value) == str(by_solve.value)
+
+
+def test_integral_elements_are_accepted_and_used():
+    scene = eb_scene()
+    r = solve(scene, elements=8)
+    for elements in (8, 8.0, np.int64(8)):
+        (e,) = equilibria(scene, elements=elements)
+        assert len(e.x) == 9 and e.energy == pytest.approx(r.energy, rel=1e-12)
+        path = equilibrium_path(scene, [0.0], elements=elements)
+        assert path.points[0]["energy"] == pytest.approx(r.energy, rel=1e-12)
+
+
+@pytest.mark.parametrize("grid", [0, 1, 2.5, True, "121", 10**6], ids=repr)
+def test_equilibria_checks_grid(grid):
+    with pytest.raises(SceneError) as exc:
+        equilibria(eb_scene(), grid=grid)
+    assert exc.value.key == "grid" and exc.value.got == grid
+
+
+@pytest.mark.parametrize("seeds", [["a"], [math.nan], "0.1"], ids=repr)
+def test_equilibria_checks_seeds(seeds):
+    with pytest.raises(SceneError) as exc:
+        equilibria(eb_scene(), seeds=seeds)
+    assert exc.value.key.startswith("seeds")
+
+
+BAD_FORCES = [(["a", "b"], "P_values[0]"), ([True], "P_values[0]"),
+              ([0.0, math.nan], "P_values[1]"), ([math.inf], "P_values[0]"),
+              (np.array([0.0, -np.inf]), "P_values[1]"), ("12", "P_values"),
+              ({"P": 1.0}, "P_values"), (None, "P_values"), (True, "P_values"),
+              (np.array([[0.0, 1.0]]), "P_values[0]")]
+
+
+@pytest.mark.parametrize("P_values, key", BAD_FORCES, ids=[repr(b[0]) for b in BAD_FORCES])
+def test_path_checks_its_forces_before_any_work(monkeypatch, P_values, key):
+    import gaocvx.nonconvex.path as path_module
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("work began before the arguments were checked")
+
+    monkeypatch.setattr(path_module, "characteristic_point", no_work)
+    monkeypatch.setattr("gaocvx.nonconvex.stationary.equilibria", no_work)
+    with pytest.raises(SceneError) as exc:
+        equilibrium_path(eb_scene(), P_values)
+    assert exc.value.key == key
+
+
+def test_path_of_one_number_is_a_path_of_one_force():
+    scene = eb_scene()
+    r = solve(scene.with_overrides({"load.axial": 5e3}))
+    for P in (5e3, np.float64(5e3), np.array(5e3), 5000):
+        path = equilibrium_path(scene, P)
+        assert path.P == [5e3] and len(path.points) == 1
+        assert path.points[0]["energy"] == pytest.approx(r.energy, rel=1e-9)
+
+
+@pytest.mark.parametrize("x_c", [-0.1, 3.5, math.nan, "1.5"], ids=repr)
+def test_path_checks_x_c(x_c):
+    with pytest.raises(SceneError) as exc:
+        equilibrium_path(eb_scene(), [0.0], x_c=x_c)
+    assert exc.value.key == "x_c"
+
+
+def test_equilibria_and_path_take_a_scene_dict_as_solve_does():
+    r = solve(EB)
+    assert equilibria(EB)[0].energy == pytest.approx(r.energy, rel=1e-9)
+    assert equilibrium_path(EB, [0.0]).points[0]["energy"] == pytest.approx(r.energy, rel=1e-9)

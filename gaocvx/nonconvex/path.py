@@ -66,7 +66,8 @@ class EquilibriumPath:
     x_c : float
         Where ``w_c`` is taken [m].
     errors : dict
-        P -> message, for forces that could not be solved (e.g. two unstable modes).
+        P -> message, for the forces skipped: three or more unstable modes
+        (:func:`.stationary.equilibria` searches one or two), or no minimiser.
     """
 
     P: list
@@ -127,25 +128,42 @@ def equilibrium_path(scene, P_values, elements: int | None = None, x_c: float | 
 
     Parameters
     ----------
-    scene : Scene
-    P_values : sequence of float
+    scene : Scene or Mapping
+        A dict with the structure of a scene file is validated into a Scene.
+    P_values : array_like of float
+        The axial forces [N] (compression positive), finite; a sequence or
+        1-d array, or one number (a path of one force).
     elements : int, optional
+        Overrides ``scene.mesh.elements``; checked as :func:`gaocvx.solve`
+        checks it.
     x_c : float, optional
-        Where to take the characteristic deflection [m].
+        Where to take the characteristic deflection [m], on the beam
+        (``0 <= x_c <= L``).
     progress : callable, optional
         ``progress(done, total)`` after each force.
 
     Returns
     -------
     EquilibriumPath
-        Forces with more than one unstable mode (or without a minimiser) are
-        listed in ``errors`` and skipped.
-    """
-    from .stationary import equilibria
+        Forces with three or more unstable modes, or without a minimiser
+        (Euler-Bernoulli, or a Gao beam with ``E_alpha = 0``, at or above
+        ``P_bar_h``), are listed in ``errors`` and skipped.
 
-    P_values = [float(P) for P in P_values]
+    Raises
+    ------
+    SceneError
+        Before any work, naming the argument (``scene``, ``P_values[i]``,
+        ``elements``, ``x_c``) and the offending value.
+    """
+    from ..scene import check_solve_arguments, number
+    from .stationary import equilibria, numbers_of
+
+    scene = check_solve_arguments(scene, "global", elements)
+    P_values = numbers_of("P_values", P_values)
     if x_c is None:
         x_c = characteristic_point(scene, elements)
+    else:
+        x_c = number("x_c", x_c, lo=0.0, hi=scene.beam.length)
     points, errors = [], {}
     seeds = np.zeros(0)
     for done, P in enumerate(P_values, start=1):

@@ -43,7 +43,9 @@ from __future__ import annotations
 
 import logging
 import math
+import numbers
 import time
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -52,15 +54,43 @@ import scipy.optimize as so
 from ..discrete import DiscreteProblem
 from ..errors import SceneError, SolverError
 from ..result import extremum
+from ..scene import check_solve_arguments, number, whole
 from .bounds import check_bounded, equilibrium_box
 
-__all__ = ["Equilibrium", "equilibria", "GRID"]
+__all__ = ["Equilibrium", "equilibria", "GRID", "MAX_GRID"]
 
 log = logging.getLogger(__name__)
 
 # Grid points of F' over the amplitude range (odd: s = 0 is one of them, the
 # trivial equilibrium of an unloaded beam).
 GRID = 121
+# At most this many (each is a solve of the reduced function): a bound on the
+# work a typo can ask for, far above any grid that resolves more roots.
+MAX_GRID = 100_000
+
+
+def numbers_of(key: str, values) -> list:
+    """``values`` as a list of finite floats, or SceneError naming ``key`` and the bad entry.
+
+    A sequence, 1-d array or other iterable of real numbers; one number is a
+    list of one (as numpy's ``array_like``).  Strings, mappings, bools, NaN
+    and infinities are refused.
+
+    Examples
+    --------
+    >>> numbers_of("P_values", np.array([0.0, 2e9])), numbers_of("P_values", 1e9)
+    ([0.0, 2000000000.0], [1000000000.0])
+    >>> numbers_of("P_values", [1e9, float("nan")])
+    Traceback (most recent call last):
+    ...
+    gaocvx.errors.SceneError: P_values[1]: must be finite (got nan)
+    """
+    if isinstance(values, (numbers.Number, np.generic)) or \
+            (isinstance(values, np.ndarray) and values.ndim == 0):
+        return [number(key, values)]
+    if isinstance(values, (str, bytes, Mapping)) or not isinstance(values, Iterable):
+        raise SceneError(key, "must be a number or a sequence of numbers", values)
+    return [number(f"{key}[{i}]", v) for i, v in enumerate(values)]
 # |F'(s)| |s| at a zero, relative to the equilibrium's energy scale (sum of
 # |energy parts|), at most (the node programs' own accuracy is about 1e-10).
 ROOT_TOL = 1e-8
@@ -143,14 +173,18 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
 
     Parameters
     ----------
-    scene : Scene
+    scene : Scene or Mapping
+        A dict with the structure of a scene file is validated into a Scene.
     elements : int, optional
-        Overrides ``scene.mesh.elements``.
+        Overrides ``scene.mesh.elements``; checked as :func:`gaocvx.solve`
+        checks it (a whole number in [1, 10^6]: ``8.0`` and numpy integers
+        are accepted, ``2.5``, ``"8"`` and bools are not).
     seeds : sequence of float, optional
         Amplitudes [m] (:attr:`Equilibrium.amplitude_m`) to sample besides the
         grid: a path's previous equilibria.
     grid : int
-        Grid points over the amplitude range.
+        Grid points over the amplitude range, 2 to :data:`MAX_GRID` (one
+        unstable mode; two sample their own ``stationary2.GRID2`` square).
     fast : bool, optional
         The reduced function through the banded Newton machinery
         (:class:`.fast.FastProgram`; with an obstacle or channel
@@ -167,9 +201,11 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
     Raises
     ------
     SceneError
-        For scenes with more than two unstable modes, without a minimiser, or
-        on too fine a mesh (above ``api.MAX_FAST_ELEMENTS`` elements, or above
-        ``minimum.MAX_ELEMENTS`` with ``fast=False``).
+        For an argument out of range (naming it: ``scene``, ``elements``,
+        ``seeds``, ``grid``, ``fast``), for scenes with more than two unstable
+        modes, without a minimiser, or on too fine a mesh (above
+        ``api.MAX_FAST_ELEMENTS`` elements, or above ``minimum.MAX_ELEMENTS``
+        with ``fast=False``).
     SolverError
         When a solve failed at a zero of the reduced gradient, or no
         equilibrium was found, on the dense programs or beyond them (the fast
@@ -180,6 +216,12 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
     from .modes import MAX_UNSTABLE, unstable_modes
     from .node import NodeProgram
 
+    # The checks of solve(): below the limit the answer is solve(scene, "global")'s.
+    scene = check_solve_arguments(scene, "global", elements)
+    seeds = numbers_of("seeds", seeds)
+    grid = whole("grid", grid, 2, MAX_GRID)
+    if fast is not None and not isinstance(fast, (bool, np.bool_)):
+        raise SceneError("fast", "must be True, False or None", fast)
     dp = DiscreteProblem(scene, elements=elements, check_convexity=False)
     if provably_convex(dp):
         return _convex_equilibrium(scene, elements, dp)
