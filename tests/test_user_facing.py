@@ -101,3 +101,33 @@ def test_one_warning_for_a_returned_uncertified_convex_answer(caplog):
         pytest.skip("this Clarabel certifies the scene: nothing uncertified to report")
     (warning,) = _records(caplog, logging.WARNING)
     assert result.message in warning.getMessage()
+
+
+# ---------------------------------------------------------------- top-level exports
+
+NONCONVEX_NAMES = ("equilibria", "equilibrium_path", "Equilibrium", "EquilibriumPath")
+
+
+def test_equilibria_and_paths_are_exported_from_the_package():
+    import gaocvx
+    import gaocvx.nonconvex as nonconvex
+    from gaocvx import Equilibrium, EquilibriumPath, equilibria, equilibrium_path
+
+    assert (equilibria, equilibrium_path) == (nonconvex.equilibria, nonconvex.equilibrium_path)
+    assert (Equilibrium, EquilibriumPath) == (nonconvex.Equilibrium, nonconvex.EquilibriumPath)
+    for name in NONCONVEX_NAMES:
+        assert name in gaocvx.__all__ and name in dir(gaocvx)
+        assert name in gaocvx.__doc__    # help(gaocvx)'s public API lists it
+    with pytest.raises(AttributeError, match="no attribute 'equilibrium'"):
+        gaocvx.equilibrium   # noqa: B018 - a near miss is still an error
+
+
+def test_the_package_imports_nonconvex_only_on_first_use():
+    """``import gaocvx`` stays as fast as without the exports (no scipy.optimize)."""
+    import subprocess
+    import sys
+
+    code = ("import sys, gaocvx; print('gaocvx.nonconvex' in sys.modules); "
+            "gaocvx.equilibria; print('gaocvx.nonconvex' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["False", "True"]

@@ -1,7 +1,7 @@
 """Beyond the convexity limit: certified global minimisers and all equilibria.
 
 Above ``P_bar_h`` the discrete energy is convex except along the k unstable
-buckling modes (``../shared/spec/nonconvex.md``, docs/nonconvex.md):
+buckling modes (docs/nonconvex.md):
 
 ``modes``      the k unstable modes of (K, mu G), G-normalised
 ``bounds``     the box of mode amplitudes containing every minimiser; refusal
