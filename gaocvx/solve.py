@@ -70,7 +70,9 @@ def solve(scene: Scene, method: str | None = None, *, elements: int | None = Non
     scene : Scene
     method : {"auto", "convex", "newton", "cvm", "global"}, optional
         Overrides ``scene.solve.method``.  ``"global"``: the certified global
-        minimiser, also above ``P_bar_h`` (:mod:`gaocvx.nonconvex`).
+        minimiser, also above ``P_bar_h`` (:mod:`gaocvx.nonconvex`);
+        ``"auto"`` takes it where P is not provably below ``P_bar_h``, else
+        Newton (:func:`choose_method`).
     elements : int, optional
         Overrides ``scene.mesh.elements``.
     solver : {"clarabel", "osqp"}, optional
@@ -86,10 +88,48 @@ def solve(scene: Scene, method: str | None = None, *, elements: int | None = Non
     Raises
     ------
     SceneError
-        For input the method cannot accept (e.g. P >= P_bar_h).
+        For input the method cannot accept, naming the argument or scene key:
+
+        - a bad argument (``scene``, ``method``, ``elements``, ``solver``), or
+          a mesh that would not fit in memory;
+        - ``"convex"``, ``"newton"`` and ``"cvm"``: an axial force not provably
+          below the convexity limit ``P_bar_h`` of the mesh (``P_hat_h`` on a
+          bonded foundation); ``"cvm"`` also a bonded foundation or a
+          gap or stiffness profile;
+        - ``"global"``, and ``"auto"``, which uses it where P is not provably
+          below the limit, solve there but refuse (:mod:`gaocvx.nonconvex`) a
+          scene without a minimiser: one without the quartic term
+          (Euler-Bernoulli, or Gao with ``E_alpha = 0``), whatever it rests
+          on (with a bonded foundation: at or above ``P_hat_h``); and more
+          than three unstable buckling modes, or more than
+          ``nonconvex.api.MAX_FAST_ELEMENTS`` (8192) elements.
     SolverError
         If the method returns no solution at all.  A solution that fails its
         optimality test is returned with ``status == "inaccurate"``.
+
+    Examples
+    --------
+    Above the convexity limit (``P_bar_h = 1.168e9`` N here) ``auto`` takes the
+    global method; the convex methods refuse the force:
+
+    >>> beam = {"model": "gao", "supports": "P4", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+    ...         "half_thickness": 0.1, "width": 1.0}
+    >>> scene = Scene.from_dict({"beam": beam, "load": {"q": -1e6, "axial": 1.3e9},
+    ...                          "mesh": {"elements": 8}})
+    >>> solve(scene).method
+    'global'
+    >>> solve(scene, "newton")                     # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    gaocvx.errors.SceneError: load.axial: P = 1.3e+09 N is not below the convexity limit ...
+
+    The Euler-Bernoulli beam above its own limit (1.38e9 N) has no minimiser:
+
+    >>> eb = scene.with_overrides({"beam.model": "euler-bernoulli", "load.axial": 2e9})
+    >>> solve(eb)                                  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    gaocvx.errors.SceneError: load.axial: ... unbounded below ...: there is no minimiser ...
     """
     scene = check_solve_arguments(scene, method, elements, solver)
     t0 = time.perf_counter()

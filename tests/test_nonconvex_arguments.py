@@ -178,3 +178,24 @@ def test_equilibria_and_path_take_a_scene_dict_as_solve_does():
     r = solve(EB)
     assert equilibria(EB)[0].energy == pytest.approx(r.energy, rel=1e-9)
     assert equilibrium_path(EB, [0.0]).points[0]["energy"] == pytest.approx(r.energy, rel=1e-9)
+
+
+# --------------------------------------------------------------- what a path skips
+
+def test_path_takes_two_unstable_modes_and_skips_three():
+    """The documented limit: k = 2 is searched (stationary2), k >= 3 is skipped.
+
+    A clamped-clamped (P1) Gao beam without load buckles at 4 pi^2, 80.76 and
+    16 pi^2 times EI / (mu L^2) (its symmetric and antisymmetric modes): 1.1e10 N
+    lies between the second and the third, 2.2e10 N between the third and the
+    fourth (238.2 EI / (mu L^2)).
+    """
+    beam = {"model": "gao", "supports": "P1", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+            "half_thickness": 0.1, "width": 1.0}
+    scene = Scene.from_dict({"beam": beam, "load": {"q": 0.0}, "mesh": {"elements": 8}})
+    unit = 2.1e11 * (2.0 / 3.0) * 0.1**3 / DiscreteProblem(scene).mu   # EI / (mu L^2)
+    assert 80.76 * unit < 1.1e10 < 16 * math.pi**2 * unit < 2.2e10 < 238.2 * unit
+    path = equilibrium_path(scene, [1.1e10, 2.2e10])
+    # w = 0, the two mirror minima along the first mode, the two saddles along the second
+    assert len(path.at(1.1e10)) == 5 and 1.1e10 not in path.errors
+    assert path.at(2.2e10) == [] and "3 unstable buckling modes" in path.errors[2.2e10]
