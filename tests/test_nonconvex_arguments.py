@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 from gaocvx import DiscreteProblem, Scene, solve
+from gaocvx.cli import main
 from gaocvx.errors import SceneError
 from gaocvx.nonconvex import equilibria, equilibrium_path, unstable_modes
 
@@ -199,3 +200,81 @@ def test_path_takes_two_unstable_modes_and_skips_three():
     # w = 0, the two mirror minima along the first mode, the two saddles along the second
     assert len(path.at(1.1e10)) == 5 and 1.1e10 not in path.errors
     assert path.at(2.2e10) == [] and "3 unstable buckling modes" in path.errors[2.2e10]
+
+
+# --------------------------------------------------------------- the path command
+
+@pytest.fixture
+def eb_file(tmp_path):
+    path = tmp_path / "eb.toml"
+    path.write_text(EB_TOML)
+    return path
+
+
+def test_cli_euler_bernoulli_path_below_the_limit(eb_file, capsys):
+    from gaocvx.scene import load_scene
+
+    scene = load_scene(str(eb_file))
+    assert main(["path", str(eb_file), "--axial", "0:1.2e4:3"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].startswith("# 3 equilibria at 3 axial forces; w_c = w(1.5 m)")
+    energies = [float(line.split("energy")[1].split()[0]) for line in out[1:]]
+    expected = [solve(scene.with_overrides({"load.axial": P})).energy for P in (0, 6e3, 1.2e4)]
+    assert energies == pytest.approx(expected, rel=1e-5)   # (printed to 6 digits)
+    assert main(["path", str(eb_file), "--axial", "5e3:5e3:1"]) == 0
+    assert capsys.readouterr().out.startswith("# 1 equilibrium at 1 axial force; ")
+
+
+def test_cli_path_with_skipped_forces_prints_the_rest_and_exits_2(eb_file, capsys):
+    code = main(["path", str(eb_file), "--axial", "0:4.5e4:4"])   # two above 1.535e4 N
+    out, err = capsys.readouterr()
+    assert code == 2
+    assert out.splitlines()[0].startswith("# 2 equilibria at 4 axial forces (2 skipped); ")
+    assert len(out.splitlines()) == 3
+    errors = err.splitlines()
+    assert len(errors) == 2 and all("there is no minimiser" in e for e in errors)
+    assert errors[0].startswith("error: P = 30000 N: load.axial: ")
+
+
+def _spoil(monkeypatch, statuses):
+    """Make the path's equilibria inaccurate where ``statuses`` says (the exit status's input)."""
+    import gaocvx.nonconvex.path as path_module
+    real = path_module.equilibrium_path
+
+    def spoiled(*args, **kwargs):
+        path = real(*args, **kwargs)
+        for point, status in zip(path.points, statuses):
+            point["status"] = status
+        return path
+
+    monkeypatch.setattr(path_module, "equilibrium_path", spoiled)
+
+
+def test_cli_path_exit_status_ranks_input_over_accuracy(eb_file, capsys, monkeypatch):
+    _spoil(monkeypatch, ["inaccurate"])
+    assert main(["path", str(eb_file), "--axial", "0:1e4:2"]) == 1     # a solver's failure
+    assert main(["path", str(eb_file), "--axial", f"0:{2 * EULER}:2"]) == 2   # and a refusal
+    capsys.readouterr()
+
+
+def test_cli_equilibria_counts_in_words(eb_file, capsys, monkeypatch):
+    import gaocvx.nonconvex.stationary as stationary
+    real = stationary.equilibria
+
+    def spoiled(*args, **kwargs):
+        eqs = real(*args, **kwargs)
+        eqs[0].status = "inaccurate"
+        return eqs
+
+    monkeypatch.setattr(stationary, "equilibria", spoiled)
+    assert main(["equilibria", str(eb_file)]) == 1
+    assert capsys.readouterr().err.endswith(": 1 equilibrium not found accurately\n")
+
+
+def test_cli_negative_axial_range_says_how_to_write_it(eb_file, capsys):
+    assert main(["path", str(eb_file), "--axial", "-1e4:1e4:3"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: arguments: argument --axial: expected one argument")
+    assert "--axial=START:STOP:NUM, e.g. --axial=-1e9:2e9:4" in err
+    assert main(["path", str(eb_file), "--axial=-1e4:1e4:3"]) == 0   # the form that parses
+    assert capsys.readouterr().out.startswith("# 3 equilibria at 3 axial forces; ")

@@ -1,8 +1,12 @@
 """The ``gaocvx equilibria`` and ``gaocvx path`` subcommands.
 
 ``add_commands(sub, common)`` registers them on the main parser
-(:mod:`gaocvx.cli`); each returns the exit status: 0 when every answer is
-accurate, 1 when one is not, 2 for bad input (raised as SceneError).
+(:mod:`gaocvx.cli`); each returns the exit status of the project's contract
+(README, docs/getting-started.md): 0 when every answer is accurate, 1 when one
+is not (a solver failure), 2 for bad input (raised as SceneError).  A path
+whose forces are partly out of range (three or more unstable modes, no
+minimiser) prints the others and exits 2, as a sweep with invalid values does;
+with inaccurate points too, the larger status, 2, as for several scenes.
 
 Examples
 --------
@@ -16,11 +20,13 @@ Examples
 from __future__ import annotations
 
 import csv
+import functools
 import logging
 import sys
 
 import numpy as np
 
+from ..cli.common import EXIT_INPUT, EXIT_OK, EXIT_SOLVER
 from ..errors import SceneError
 
 __all__ = ["add_commands", "parse_range"]
@@ -53,6 +59,11 @@ def parse_range(text: str) -> np.ndarray:
     return np.linspace(start, stop, num)
 
 
+def _count(n: int, one: str, many: str) -> str:
+    """``n`` and the noun's singular or plural: "1 equilibrium", "3 equilibria"."""
+    return f"{n} {one if n == 1 else many}"
+
+
 def _scene(args):
     from ..cli.common import _overrides
     from ..scene import load_scene
@@ -79,8 +90,9 @@ def _cmd_equilibria(args) -> int:
         save_equilibria_plot(eqs, args.plot, scene)
     bad = [e for e in eqs if e.status != "optimal"]
     if bad:
-        print(f"error: {args.scene}: {len(bad)} equilibria not found accurately", file=sys.stderr)
-    return 1 if bad else 0
+        print(f"error: {args.scene}: {_count(len(bad), 'equilibrium', 'equilibria')} not found "
+              "accurately", file=sys.stderr)
+    return EXIT_SOLVER if bad else EXIT_OK
 
 
 def _cmd_path(args) -> int:
@@ -102,7 +114,9 @@ def _cmd_path(args) -> int:
         for p in path.points:
             print(_dumps(p), flush=True)
     else:
-        print(f"# {len(path.points)} equilibria at {len(path.P)} axial forces; "
+        skipped = f" ({len(path.errors)} skipped)" if path.errors else ""
+        print(f"# {_count(len(path.points), 'equilibrium', 'equilibria')} at "
+              f"{_count(len(path.P), 'axial force', 'axial forces')}{skipped}; "
               f"w_c = w({path.x_c:.4g} m)")
         for p in path.points:
             print(f"P {p['P']:12.5g} N  w_c {p['w_c']:12.5g} m  energy {p['energy']:13.6g} J  "
@@ -118,7 +132,21 @@ def _cmd_path(args) -> int:
         P_bar = DiscreteProblem(scene, check_convexity=False).P_bar_h
         save_path_plot(path, args.plot, scene, P_bar)
     bad = [p for p in path.points if p["status"] != "optimal"]
-    return 1 if bad or path.errors else 0
+    # Skipped forces are input out of range (SceneError: no minimiser, too many modes),
+    # not a solver failure: 2, which outranks an inaccurate point's 1.
+    return EXIT_INPUT if path.errors else EXIT_SOLVER if bad else EXIT_OK
+
+
+def _path_error(error, message: str):
+    """The path parser's errors; ``--axial -1e9:...`` gets the form that parses.
+
+    argparse takes a value that starts with '-' and is no plain number for an
+    option, so a range from a tension gives "expected one argument".
+    """
+    if message.startswith("argument --axial") and "expected one argument" in message:
+        message += ("; a range that starts below zero needs '=': --axial=START:STOP:NUM, "
+                    "e.g. --axial=-1e9:2e9:4")
+    error(message)
 
 
 def add_commands(sub, common) -> None:
@@ -134,6 +162,7 @@ def add_commands(sub, common) -> None:
     p.set_defaults(func=_cmd_equilibria)
 
     p = sub.add_parser("path", help="the equilibrium path: every equilibrium against P")
+    p.error = functools.partial(_path_error, p.error)
     p.add_argument("scene", metavar="SCENE")
     p.add_argument("--axial", required=True, metavar="START:STOP:NUM",
                    help="axial forces [N], e.g. --axial=-1e9:4e9:51 (with '=' when START is "
