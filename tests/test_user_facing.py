@@ -131,3 +131,80 @@ def test_the_package_imports_nonconvex_only_on_first_use():
             "gaocvx.equilibria; print('gaocvx.nonconvex' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.split() == ["False", "True"]
+
+
+# ---------------------------------------------------------------- pictures of equilibria
+
+def _buckled(elements=8):
+    """The unloaded pinned Gao beam above its limit: two mirror images and w = 0."""
+    return Scene.from_dict(scene_dict("P4", q=None, axial=1.3e9, elements=elements))
+
+
+def test_equilibria_picture_draws_the_hermite_interpolant():
+    """Between nodes the curve is the cubic through the nodal values and slopes."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from gaocvx.nonconvex import equilibria
+    from gaocvx.nonconvex.pictures import equilibria_figure
+
+    scene = _buckled()
+    eqs = equilibria(scene)
+    fig = equilibria_figure(eqs, scene)
+    curves = [ln for ln in fig.axes[0].lines if not ln.get_label().startswith("_")]
+    assert len(curves) == len(eqs)
+    for e, line in zip(eqs, curves):
+        x, w_mm = (np.asarray(v, float) for v in line.get_data())
+        # The cubic Hermite interpolant at an element's midpoint: the mean of the
+        # end values plus h (s_left - s_right) / 8.
+        h = np.diff(e.x)
+        mid = e.x[:-1] + h / 2
+        expected = (e.w[:-1] + e.w[1:]) / 2 + h * (e.slope[:-1] - e.slope[1:]) / 8
+        drawn = np.interp(mid, x, w_mm * 1e-3)
+        scale = max(np.abs(e.w).max(), 1e-300)
+        assert np.abs(drawn - expected).max() <= 1e-3 * scale
+    # (a buckled shape bends between nodes: a polygon would miss by h (s_l - s_r) / 8)
+    e = eqs[0]
+    assert np.abs(np.diff(e.slope)).max() * np.diff(e.x).min() / 8 > 1e-2 * np.abs(e.w).max()
+    plt.close(fig)
+
+
+def _equilibrium(energy, stable=True):
+    import numpy as np
+
+    from gaocvx import Equilibrium
+    x = np.linspace(0.0, 1.0, 5)
+    return Equilibrium(energy, stable, [0.0], x, np.sin(np.pi * x) * 1e-3,
+                       np.pi * np.cos(np.pi * x) * 1e-3, 0.0, "optimal", 1.3e9)
+
+
+def _legend(eqs):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from gaocvx.nonconvex.pictures import equilibria_figure
+    fig = equilibria_figure(eqs, _buckled())
+    texts = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    plt.close(fig)
+    return texts
+
+
+def test_equilibria_legend_tells_close_energies_apart():
+    # The new user's two equilibria: -1.114e+09 J both, 2.7e5 J apart.
+    energies = [-1.1140e9, -1.1140e9 + 2.7e5, 3.0e4]
+    texts = _legend([_equilibrium(v) for v in energies])
+    printed = [float(t.split(", ")[1].split(" J")[0]) for t in texts]
+    assert len(set(printed)) == 3
+    for value, shown in zip(energies, printed):   # each nearer its own energy than the next
+        assert abs(shown - value) < 2.7e5 / 2
+    assert [" (global minimum)" in t for t in texts] == [True, False, False]
+
+
+def test_equilibria_legend_marks_mirror_images_both_global():
+    energies = [-6.7e7, -6.7e7 * (1 - 1e-15), -1.0e7]   # equal but for round-off
+    texts = _legend([_equilibrium(v) for v in energies])
+    assert [" (global minimum)" in t for t in texts] == [True, True, False]
+    assert texts[0].split(", ")[1] == texts[1].split(", ")[1]   # no round-off digits shown

@@ -1,7 +1,9 @@
-"""Pictures of equilibria and equilibrium paths (matplotlib).
+"""Pictures of equilibria and equilibrium paths (matplotlib, imported only to draw).
 
 Stable equilibria and branches are drawn solid, unstable ones dashed; on a
-path the global minimiser at each axial force is marked.
+path the global minimiser at each axial force is marked.  An equilibrium's
+deflection is drawn as the Hermite cubic interpolant of its nodal values and
+slopes (as ``solve --plot`` draws a result), not as straight segments.
 
 Examples
 --------
@@ -23,37 +25,101 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["save_equilibria_plot", "save_path_plot"]
+__all__ = ["save_equilibria_plot", "equilibria_figure", "save_path_plot", "energy_digits"]
+
+# Energies closer than this fraction of the largest |energy| are one value to
+# round-off (mirror images): as path.py ties global minimisers.
+TIE = 1e-9
+# Points per picture along the beam (and every node): smooth at any mesh.
+SAMPLES = 801
 
 
 def _title(scene) -> str:
     b, load = scene.beam, scene.load
     q = "table" if isinstance(load.q, tuple) else ("0" if load.q is None else f"{load.q:.3g}")
     extra = ""
-    if scene.foundation is not None:
-        extra = f", foundation gap {scene.foundation.gap}"
-    elif scene.obstacle is not None:
-        extra = f", obstacle gap {scene.obstacle.gap}"
+    part = scene.foundation or scene.obstacle
+    if part is not None:
+        gap = "profile" if isinstance(part.gap, tuple) else f"{part.gap:g} m"
+        extra = f", {scene.contact} gap {gap}"
+        if getattr(part, "gap_above", None) is not None:   # a channel
+            extra += f", gap_above {part.gap_above:g} m"
     return f"{b.model} {b.supports}, q = {q} N/m{extra}"
 
 
+def energy_digits(energies, least: int = 4, most: int = 12) -> int:
+    """Significant digits that print every two distinct energies differently.
+
+    Energies within ``TIE`` times the largest ``|energy|`` of each other are
+    one value (mirror images) and may print alike.
+
+    Parameters
+    ----------
+    energies : sequence of float
+    least, most : int
+        The range of digits returned.
+
+    Examples
+    --------
+    >>> energy_digits([-1.1140e9, -1.1137e9, 2.2e4])    # 4 digits: both -1.114e+09
+    5
+    >>> energy_digits([-6.7e7, -6.7e7 * (1 + 1e-15), 3.0])   # a tie to round-off
+    4
+    """
+    e = np.sort(np.asarray(energies, float))
+    tie = TIE * float(np.max(np.abs(e), initial=0.0))
+    # Rounding is monotone: neighbours printed apart keep every pair apart.
+    pairs = [(a, b) for a, b in zip(e[:-1], e[1:]) if b - a > tie]
+    for digits in range(least, most):
+        if all(f"{a:.{digits}g}" != f"{b:.{digits}g}" for a, b in pairs):
+            return digits
+    return most
+
+
+def _smooth(e, L: float):
+    """Points along the beam and the deflection there: the Hermite interpolant of ``e``."""
+    from ..fem import eval_matrix
+
+    xs = np.union1d(np.linspace(0.0, L, SAMPLES), e.x)
+    dofs = np.empty(2 * len(e.x))
+    dofs[0::2], dofs[1::2] = e.w, e.slope
+    return xs, eval_matrix(e.x, xs) @ dofs
+
+
 def save_equilibria_plot(eqs, path, scene):
-    """Deflections of every equilibrium (stable solid, unstable dashed); returns the path."""
+    """Write :func:`equilibria_figure` to ``path`` (.png or .svg); returns the path."""
     from ..plot import _check_file, _pyplot, _write
 
     path = _check_file(path)
+    return _write(_pyplot(), equilibria_figure(eqs, scene), Path(path))
+
+
+def equilibria_figure(eqs, scene):
+    """Deflections of every equilibrium (stable solid, unstable dashed): a Figure.
+
+    The legend gives each energy to as many digits as tell the listed ones
+    apart (:func:`energy_digits`) and marks every global minimum (mirror
+    images tie).  The caller saves or closes the figure.
+    """
+    from ..plot import _pyplot
+
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 4))
+    energies = [e.energy for e in eqs]
+    digits = energy_digits(energies)
+    lowest = min(energies, default=0.0)
+    tie = TIE * max((abs(v) for v in energies), default=0.0)
     for i, e in enumerate(eqs):
-        ax.plot(e.x, e.w * 1e3, "-" if e.stable else "--", lw=2 if i == 0 else 1.2,
-                label=f"{'stable' if e.stable else 'unstable'}, {e.energy:.4g} J"
-                      + (" (global minimum)" if i == 0 else ""))
+        xs, w = _smooth(e, scene.beam.length)
+        ax.plot(xs, w * 1e3, "-" if e.stable else "--", lw=2 if i == 0 else 1.2,
+                label=f"{'stable' if e.stable else 'unstable'}, {e.energy:.{digits}g} J"
+                      + (" (global minimum)" if e.energy <= lowest + tie else ""))
     ax.axhline(0.0, color="0.6", lw=0.6)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("w [mm]")
     ax.set_title(f"equilibria at P = {scene.load.axial:.4g} N: {_title(scene)}", fontsize=9)
     ax.legend(fontsize=8)
-    return _write(plt, fig, Path(path))
+    return fig
 
 
 def draw_path(ax, path, label_branches: bool = True):
