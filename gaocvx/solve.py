@@ -97,12 +97,12 @@ def solve(scene: Scene, method: str | None = None, *, elements: int | None = Non
           bonded foundation); ``"cvm"`` also a bonded foundation or a
           gap or stiffness profile;
         - ``"global"``, and ``"auto"``, which uses it where P is not provably
-          below the limit, solve there but refuse (:mod:`gaocvx.nonconvex`) a
-          scene without a minimiser: one without the quartic term
-          (Euler-Bernoulli, or Gao with ``E_alpha = 0``), whatever it rests
-          on (with a bonded foundation: at or above ``P_hat_h``); and more
-          than three unstable buckling modes, or more than
-          ``nonconvex.api.MAX_FAST_ELEMENTS`` (8192) elements.
+          below the limit, solve there; they refuse there
+          (:mod:`gaocvx.nonconvex`) a scene without a minimiser, i.e.
+          without the quartic term (Euler-Bernoulli, or Gao with
+          ``E_alpha = 0``) whatever it rests on (with a bonded foundation:
+          at or above ``P_hat_h``), more than three unstable buckling modes,
+          and more than ``nonconvex.api.MAX_FAST_ELEMENTS`` (8192) elements.
     SolverError
         If the method returns no solution at all.  A solution that fails its
         optimality test is returned with ``status == "inaccurate"``.

@@ -67,7 +67,8 @@ class EquilibriumPath:
         Where ``w_c`` is taken [m].
     errors : dict
         P -> message, for the forces skipped: three or more unstable modes
-        (:func:`.stationary.equilibria` searches one or two), or no minimiser.
+        (:func:`.stationary.equilibria` searches one or two), no minimiser, or
+        a mesh too fine above the limit.
     """
 
     P: list
@@ -145,9 +146,11 @@ def equilibrium_path(scene, P_values, elements: int | None = None, x_c: float | 
     Returns
     -------
     EquilibriumPath
-        Forces with three or more unstable modes, or without a minimiser
-        (Euler-Bernoulli, or a Gao beam with ``E_alpha = 0``, at or above
-        ``P_bar_h``), are listed in ``errors`` and skipped.
+        Forces that :func:`.stationary.equilibria` refuses are listed in
+        ``errors`` and skipped: three or more unstable modes (one and two are
+        searched), no minimiser (Euler-Bernoulli, or a Gao beam with
+        ``E_alpha = 0``, at or above ``P_bar_h``; ``P_hat_h`` on a bonded
+        foundation), or a mesh too fine for the search above the limit.
 
     Raises
     ------

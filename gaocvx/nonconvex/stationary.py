@@ -67,6 +67,9 @@ GRID = 121
 # At most this many (each is a solve of the reduced function): a bound on the
 # work a typo can ask for, far above any grid that resolves more roots.
 MAX_GRID = 100_000
+# |F'(s)| |s| at a zero, relative to the equilibrium's energy scale (sum of
+# |energy parts|), at most (the node programs' own accuracy is about 1e-10).
+ROOT_TOL = 1e-8
 
 
 def numbers_of(key: str, values) -> list:
@@ -91,9 +94,6 @@ def numbers_of(key: str, values) -> list:
     if isinstance(values, (str, bytes, Mapping)) or not isinstance(values, Iterable):
         raise SceneError(key, "must be a number or a sequence of numbers", values)
     return [number(f"{key}[{i}]", v) for i, v in enumerate(values)]
-# |F'(s)| |s| at a zero, relative to the equilibrium's energy scale (sum of
-# |energy parts|), at most (the node programs' own accuracy is about 1e-10).
-ROOT_TOL = 1e-8
 
 
 @dataclass
