@@ -208,3 +208,51 @@ def test_equilibria_legend_marks_mirror_images_both_global():
     texts = _legend([_equilibrium(v) for v in energies])
     assert [" (global minimum)" in t for t in texts] == [True, True, False]
     assert texts[0].split(", ")[1] == texts[1].split(", ")[1]   # no round-off digits shown
+
+
+# ---------------------------------------------------------------- documented JSON Lines
+
+def _documented_fields(marker: str, saying: str = "") -> set:
+    """The names in the first column of the table after ``marker`` in scene-format.md
+    (of the rows whose text contains ``saying``)."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).parent.parent / "docs" / "scene-format.md").read_text()
+    table = text.split(marker, 1)[1].split("\n\n", 2)[1]
+    return {name for row in table.splitlines()[2:] if saying in row
+            for name in re.findall(r"`([A-Za-z_]+)`", row.split("|")[1])}
+
+
+@pytest.mark.parametrize("command, extra", [("equilibria", []),
+                                            ("path", ["--axial", "1.2e9:1.4e9:2"])])
+def test_json_lines_fields_are_those_documented(command, extra, capsys):
+    import json
+    from pathlib import Path
+
+    from gaocvx.cli import main
+
+    example = Path(__file__).parent.parent / "examples" / "buckled_pinned.toml"
+    assert main([command, str(example), "--json", *extra]) == 0
+    lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert len(lines) >= 3   # the example has three equilibria at 1.3e9 N and 1.4e9 N
+    for obj in lines:
+        assert set(obj) == _documented_fields(f"`gaocvx {command} --json` writes")
+
+
+def test_global_certificate_fields_are_those_documented():
+    """Above the limit every documented field; below it those not marked 'above P̄_h only'."""
+    from pathlib import Path
+
+    from gaocvx import load_scene
+
+    documented = _documented_fields("For `global`, the object `global`")
+    above_only = _documented_fields("For `global`, the object `global`", "above P̄_h only")
+    assert above_only and above_only < documented
+    scene = load_scene(Path(__file__).parent.parent / "examples" / "buckled_pinned.toml")
+    above = solve(scene)
+    assert above.method == "global" and above.extra["global"]["unstable_modes"] == 1
+    assert set(above.to_dict()["global"]) == documented
+    below = solve(scene.with_overrides({"load.axial": 1e9}), "global")
+    assert below.extra["global"]["unstable_modes"] == 0
+    assert set(below.to_dict()["global"]) == documented - above_only
