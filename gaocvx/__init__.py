@@ -8,8 +8,9 @@ solve                  solve a scene; returns a Result (``method="global"``: the
 Result                 nodal values, energies, contact, evaluators
 DiscreteProblem        the non-dimensional discrete energy of a scene
 SceneError, SolverError
-equilibria             every equilibrium above P_bar_h, sorted by energy: a list
-                       of Equilibrium (energy, stable, x, w, slope, status)
+equilibria             every equilibrium (above P_bar_h: one or two unstable
+                       modes), sorted by energy: a list of Equilibrium
+                       (energy, stable, x, w, slope, status)
 equilibrium_path       every equilibrium at each of a list of axial forces: an
                        EquilibriumPath (points, at(P), branches(), rows())
 Equilibrium, EquilibriumPath
@@ -43,6 +44,7 @@ __version__ = "0.1.0"
 
 
 def __getattr__(name: str):
+    """The names of ``_NONCONVEX``, imported from gaocvx.nonconvex on first access."""
     if name in _NONCONVEX:
         from . import nonconvex
         value = getattr(nonconvex, name)

@@ -59,6 +59,12 @@ def energy_digits(energies, least: int = 4, most: int = 12) -> int:
     least, most : int
         The range of digits returned.
 
+    Returns
+    -------
+    int
+        The fewest digits from ``least`` that print every two energies
+        further apart than the tie differently (``most`` if none up to it do).
+
     Examples
     --------
     >>> energy_digits([-1.1140e9, -1.1137e9, 2.2e4])    # 4 digits: both -1.114e+09
@@ -109,11 +115,12 @@ def equilibria_figure(eqs, scene):
     digits = energy_digits(energies)
     lowest = min(energies, default=0.0)
     tie = TIE * max((abs(v) for v in energies), default=0.0)
-    for i, e in enumerate(eqs):
+    for e in eqs:
         xs, w = _smooth(e, scene.beam.length)
-        ax.plot(xs, w * 1e3, "-" if e.stable else "--", lw=2 if i == 0 else 1.2,
+        best = e.energy <= lowest + tie
+        ax.plot(xs, w * 1e3, "-" if e.stable else "--", lw=2 if best else 1.2,
                 label=f"{'stable' if e.stable else 'unstable'}, {e.energy:.{digits}g} J"
-                      + (" (global minimum)" if e.energy <= lowest + tie else ""))
+                      + (" (global minimum)" if best else ""))
     ax.axhline(0.0, color="0.6", lw=0.6)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("w [mm]")
