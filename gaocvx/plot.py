@@ -148,10 +148,8 @@ def plot(result, ax=None, label: str | None = None, annotate: bool = True, color
         else:
             _, ax = plt.subplots(figsize=(8, 4))
     scene, model = result.scene, result.scene.beam.model
-    xs = np.linspace(0.0, L, 801)
+    xs = surface_points(scene)
     part = scene.foundation or scene.obstacle
-    if part is not None and isinstance(part.gap, tuple):   # a profile's knots exactly
-        xs = np.union1d(xs, [x for x, _ in part.gap])
     w = result.deflection(xs)
     level = None if part is None else -np.asarray(part.gap_at(xs), float)
     above = getattr(scene.obstacle, "gap_above", None)
@@ -161,23 +159,8 @@ def plot(result, ax=None, label: str | None = None, annotate: bool = True, color
         ax.axhline(0.0, color="0.6", lw=1.0, ls="--", label="undeformed beam")
     ax.plot(xs, w, lw=2.0, color=color, label=label or f"{model} deflection")
     if part is not None:
-        kind = scene.contact
         if annotate:  # drawn once when several results share the Axes
-            if getattr(part, "kind", "unilateral") == "bilateral":
-                kind = "bonded foundation"
-            gaps = (f"gap {part.gap:g} m" if not isinstance(part.gap, tuple)
-                    else f"gap profile, {-level.max():.3g} to {-level.min():.3g} m")
-            ax.plot(xs, level, color="saddlebrown", lw=1.5,
-                    ls=":" if scene.contact == "foundation" else "-",
-                    label=f"{kind} surface ({gaps})")
-            if scene.contact == "obstacle":
-                ax.fill_between(xs, level - 0.15 * span, level, color="saddlebrown",
-                                alpha=0.15, lw=0)
-            if above is not None:
-                ax.plot([0.0, L], [above, above], color="saddlebrown", lw=1.5,
-                        label=f"upper surface (gap_above {above:g} m)")
-                ax.fill_between([0.0, L], above, above + 0.15 * span, color="saddlebrown",
-                                alpha=0.15, lw=0)
+            draw_surfaces(ax, scene, xs, span)
         zones = result.zones or []
         for i, (a, b) in enumerate(zones):
             lo, hi = (a, b) if b > a else (a - 0.004 * L, b + 0.004 * L)
@@ -202,6 +185,46 @@ def plot(result, ax=None, label: str | None = None, annotate: bool = True, color
     ax.set_ylim(low - 0.3 * span, high + (0.8 if above is not None else 0.6) * span)
     ax.legend(fontsize=8, loc="best", ncol=2)
     return ax
+
+
+def surface_points(scene, n: int = 801) -> np.ndarray:
+    """Points along the beam to draw a deflection and surface at: ``n`` and a gap profile's knots."""
+    xs = np.linspace(0.0, scene.beam.length, n)
+    part = scene.foundation or scene.obstacle
+    if part is not None and isinstance(part.gap, tuple):   # a profile's knots exactly
+        xs = np.union1d(xs, [x for x, _ in part.gap])
+    return xs
+
+
+def draw_surfaces(ax, scene, xs, span: float, scale: float = 1.0):
+    """Draw the foundation's (dotted) or obstacle's (solid, shaded) surface and a channel's upper one.
+
+    ``span`` is the picture's height in the Axes' units; ``scale`` converts
+    metres to them (1e3 for a picture in mm).  Returns the surface's level
+    and the upper surface (None without), in the Axes' units.
+    """
+    part = scene.foundation or scene.obstacle
+    if part is None:
+        return None, None
+    L = scene.beam.length
+    level = -np.asarray(part.gap_at(xs), float) * scale
+    above = getattr(scene.obstacle, "gap_above", None)
+    kind = scene.contact
+    if getattr(part, "kind", "unilateral") == "bilateral":
+        kind = "bonded foundation"
+    gaps = (f"gap {part.gap:g} m" if not isinstance(part.gap, tuple)
+            else f"gap profile, {-level.max() / scale:.3g} to {-level.min() / scale:.3g} m")
+    ax.plot(xs, level, color="saddlebrown", lw=1.5,
+            ls=":" if scene.contact == "foundation" else "-", label=f"{kind} surface ({gaps})")
+    if scene.contact == "obstacle":
+        ax.fill_between(xs, level - 0.15 * span, level, color="saddlebrown", alpha=0.15, lw=0)
+    if above is not None:
+        ax.plot([0.0, L], [above * scale] * 2, color="saddlebrown", lw=1.5,
+                label=f"upper surface (gap_above {above:g} m)")
+        ax.fill_between([0.0, L], above * scale, (above + 0.15 * span / scale) * scale,
+                        color="saddlebrown", alpha=0.15, lw=0)
+        above = above * scale
+    return level, above
 
 
 _BEAM = 0.6      # height of the beam in the loads panel (axes fraction)

@@ -21,7 +21,7 @@ import time
 
 import numpy as np
 
-from .convex import solve_convex
+from .convex import log_outcome, solve_convex
 from .cvm import solve_cvm
 from .discrete import DiscreteProblem
 from .errors import SceneError, SolverError
@@ -182,7 +182,8 @@ def _convex_fallback(first: DiscreteProblem, dp: DiscreteProblem, raw: dict, sol
     """
     try:
         quadratic_only = solver == "osqp" and first.needs_gao   # OSQP: QPs only
-        cdp, craw = _solve_exact(first, "convex", "clarabel" if quadratic_only else solver)
+        cdp, craw = _solve_exact(first, "convex", "clarabel" if quadratic_only else solver,
+                                 final=False)   # returned only if certified
     except (SceneError, SolverError) as exc:
         log.info("auto: newton not certified, convex failed too: %s", exc)
         return dp, raw, "newton"
@@ -196,7 +197,8 @@ def _convex_fallback(first: DiscreteProblem, dp: DiscreteProblem, raw: dict, sol
 
 
 def _solve_exact(dp: DiscreteProblem, method: str, solver: str = "clarabel",
-                 warm: dict | None = None, reuse: bool = False) -> tuple[DiscreteProblem, dict]:
+                 warm: dict | None = None, reuse: bool = False,
+                 final: bool = True) -> tuple[DiscreteProblem, dict]:
     """Newton or the convex program, in the answer's own deflection scale.
 
     The scale W of ``dp`` is a first guess (the unsupported linear answer's
@@ -212,10 +214,12 @@ def _solve_exact(dp: DiscreteProblem, method: str, solver: str = "clarabel",
         if problem.n == 0:  # every DOF fixed by the supports: the answer is w = 0
             return solve_newton(problem)
         if method == "convex":
-            return solve_convex(problem, solver, reuse=reuse)
+            # Not final: a re-solve below may replace it (logged once, at the end).
+            return solve_convex(problem, solver, reuse=reuse, final=False)
         return solve_newton(problem, start)
 
     raw = run(dp, warm)
+    replaced = 0
     for _ in range(2):
         # An answer below the zero floor (a beam pressed onto an obstacle) is
         # measured in the floor's units, where the certificate measures it.
@@ -233,7 +237,10 @@ def _solve_exact(dp: DiscreteProblem, method: str, solver: str = "clarabel",
         # Iterations count every pass: the first one's are work done too.
         if raw.get("nit") is not None and again.get("nit") is not None:
             again = {**again, "nit": raw["nit"] + again["nit"]}
+        replaced += raw["status"] != "optimal"
         dp, raw = scaled, again
+    if method == "convex":
+        log_outcome(raw, final, replaced)
     return dp, raw
 
 

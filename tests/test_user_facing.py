@@ -76,15 +76,6 @@ def test_solve_convex_warns_only_when_its_answer_is_final(caplog):
     assert raw["message"] in warning.getMessage()
 
 
-# solve() re-solves a convex answer in its own deflection scale (solve._solve_exact),
-# which calls solve_convex with final=True: the first, replaced attempt still warns.
-# These pass once _solve_exact passes final=False and logs the answer it returns
-# with convex.log_outcome.
-NEEDS_SOLVE = pytest.mark.xfail(strict=True, reason="gaocvx/solve.py: _solve_exact must call "
-                                "solve_convex(final=False) and log_outcome(raw, ...) at its end")
-
-
-@NEEDS_SOLVE
 def test_no_warning_when_the_returned_convex_answer_is_certified(caplog):
     caplog.set_level(logging.INFO, logger="gaocvx")
     result = solve(_tip_on_obstacle(-1e8), "convex")
@@ -93,7 +84,6 @@ def test_no_warning_when_the_returned_convex_answer_is_certified(caplog):
     assert any("certified, replacing" in r.getMessage() for r in _records(caplog, logging.INFO))
 
 
-@NEEDS_SOLVE
 def test_one_warning_for_a_returned_uncertified_convex_answer(caplog):
     caplog.set_level(logging.INFO, logger="gaocvx")
     result = solve(_tip_on_obstacle(-1e9), "convex")

@@ -82,11 +82,11 @@ def energy_digits(energies, least: int = 4, most: int = 12) -> int:
     return most
 
 
-def _smooth(e, L: float):
+def _smooth(e, xs):
     """Points along the beam and the deflection there: the Hermite interpolant of ``e``."""
     from ..fem import eval_matrix
 
-    xs = np.union1d(np.linspace(0.0, L, SAMPLES), e.x)
+    xs = np.union1d(xs, e.x)
     dofs = np.empty(2 * len(e.x))
     dofs[0::2], dofs[1::2] = e.w, e.slope
     return xs, eval_matrix(e.x, xs) @ dofs
@@ -107,18 +107,21 @@ def equilibria_figure(eqs, scene):
     apart (:func:`energy_digits`) and marks every global minimum (mirror
     images tie).  The caller saves or closes the figure.
     """
-    from ..plot import _pyplot
+    from ..plot import _pyplot, draw_surfaces, surface_points
 
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 4))
+    xs = surface_points(scene)
+    span = max([float(np.max(np.abs(e.w))) for e in eqs] + [0.0]) * 1e3 or 1.0
+    draw_surfaces(ax, scene, xs, span, scale=1e3)
     energies = [e.energy for e in eqs]
     digits = energy_digits(energies)
     lowest = min(energies, default=0.0)
     tie = TIE * max((abs(v) for v in energies), default=0.0)
     for e in eqs:
-        xs, w = _smooth(e, scene.beam.length)
+        x, w = _smooth(e, xs)
         best = e.energy <= lowest + tie
-        ax.plot(xs, w * 1e3, "-" if e.stable else "--", lw=2 if best else 1.2,
+        ax.plot(x, w * 1e3, "-" if e.stable else "--", lw=2 if best else 1.2,
                 label=f"{'stable' if e.stable else 'unstable'}, {e.energy:.{digits}g} J"
                       + (" (global minimum)" if best else ""))
     ax.axhline(0.0, color="0.6", lw=0.6)
