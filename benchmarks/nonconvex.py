@@ -3,13 +3,16 @@
     python benchmarks/nonconvex.py table [--output docs/nonconvex-benchmark.md]
     OPENBLAS_NUM_THREADS=1 python benchmarks/nonconvex.py fine [--output FILE] [--sizes ...] [--cases ...]
     python benchmarks/nonconvex.py paths [--output docs/nonconvex-paths.png] [--elements 12]
+    OPENBLAS_NUM_THREADS=1 python benchmarks/nonconvex.py modes [--output FILE] [--sizes ...]
 
 ``table``: for each scene and mesh, the global method's run time, node
 programs, unstable modes and certified gap (in J and relative to the energy
 scale, the sum of |energy parts|), with its status, by the dense node
 programs.  ``fine``: the same by the fast path (:mod:`gaocvx.nonconvex.fast`)
 for nonconvex.md's P4 example, the k = 2 P1 example and the P4 obstacle example
-(``--cases``) at 128 to 8192 elements (``--sizes``)
+(``--cases``) at 128 to 8192 elements (``--sizes``); ``modes``: four and five
+unstable modes (MODE_CASES) at 8 to 64 elements, with the node programs that
+``solve_global`` picks (the fast path; no second try by the other kind)
 (one BLAS thread: on a shared machine OpenBLAS's threads made a dot product
 of 10^4 numbers take 24 ms instead of 6 us).  ``paths``: the
 equilibrium path of each support (P1..P4) with and without a transverse load,
@@ -50,6 +53,12 @@ CASES = [
                                                     foundation=(0.002, 1e10))),
     ("P4, obstacle 1 cm, q = -1e8 N/m, P = 1.5e9 N", dict(supports="P4", q=-1e8, axial=1.5e9,
                                                          obstacle=0.01)),
+]
+
+# Far above the limit: lambda_n of P1 ~ 1, 2.05, 4.0, 6.05, 9.0 lambda_1 and of P4 n^2 lambda_1.
+MODE_CASES = [
+    ("P1, q = -1e7 N/m, P = 3.5e10 N (k = 4)", dict(supports="P1", q=-1e7, axial=3.5e10)),
+    ("P4, q = -1e7 N/m, P = 3.2e10 N (k = 5)", dict(supports="P4", q=-1e7, axial=3.2e10)),
 ]
 
 
@@ -116,13 +125,17 @@ def paths(out, n):
     fig.savefig(out, dpi=80)
 
 
+DEFAULT_SIZES = "128,512,2048,8192"
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("what", choices=["table", "fine", "paths"])
+    ap.add_argument("what", choices=["table", "fine", "paths", "modes"])
     ap.add_argument("--output")
     ap.add_argument("--elements", type=int, default=12)
-    ap.add_argument("--sizes", default="128,512,2048,8192",
-                    help="fine: the meshes (comma-separated element counts)")
+    ap.add_argument("--sizes", default=DEFAULT_SIZES,
+                    help="fine, modes: the meshes (comma-separated element counts; modes: "
+                         "8,16,32,64 by default)")
     ap.add_argument("--cases", default="0,2,5",
                     help="fine: indices into CASES (default: P4, P1 with k = 2, P4 on an obstacle)")
     args = ap.parse_args(argv)
@@ -131,6 +144,9 @@ def main(argv=None):
     elif args.what == "fine":
         cases = [CASES[int(i)] for i in args.cases.split(",")]
         table(args.output, cases, tuple(int(n) for n in args.sizes.split(",")), fast=True)
+    elif args.what == "modes":
+        sizes = "8,16,32,64" if args.sizes == DEFAULT_SIZES else args.sizes
+        table(args.output, MODE_CASES, tuple(int(n) for n in sizes.split(",")), fast=None)
     else:
         paths(args.output or "docs/nonconvex-paths.png", args.elements)
 

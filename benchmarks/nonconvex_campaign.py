@@ -32,8 +32,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 sys.path.insert(0, str(ROOT))  # this tree's gaocvx, also from a clone beside an editable install
 
-from nonconvex_campaign_support import (SLOW, TOL_E, TOL_KKT, random_scene,  # noqa: E402
-                                        run_case)
+from nonconvex_campaign_support import (MAX_MODES, SLOW, TOL_E, TOL_KKT,  # noqa: E402
+                                        random_scene, run_case)
 
 log = logging.getLogger("nonconvex_campaign")
 
@@ -163,7 +163,7 @@ def table(records, shor_rows, command, elapsed, elements=None) -> str:
            f"scale; an `optimal` minimiser must be a KKT point (relative dual norm <= {TOL_KKT:g}) "
            "and, without an obstacle, have a positive semidefinite independent Hessian; "
            "reported mirror minimisers must match in energy; refusals must be justified "
-           "(no quartic term, more than 3 unstable modes, more than 8192 elements).", "",
+           f"(no quartic term, more than {MAX_MODES} unstable modes, more than 8192 elements).", "",
            "## Outcome", "",
            "| status | scenes |", "|---|---:|"]
     out += [f"| {k} | {v} |" for k, v in sorted(status.items())]

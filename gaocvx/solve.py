@@ -101,7 +101,7 @@ def solve(scene: Scene, method: str | None = None, *, elements: int | None = Non
           (:mod:`gaocvx.nonconvex`) a scene without a minimiser, i.e.
           without the quartic term (Euler-Bernoulli, or Gao with
           ``E_alpha = 0``) whatever it rests on (with a bonded foundation:
-          at or above ``P_hat_h``), more than three unstable buckling modes,
+          at or above ``P_hat_h``), more than five unstable buckling modes,
           and more than ``nonconvex.api.MAX_FAST_ELEMENTS`` (8192) elements.
     SolverError
         If the method returns no solution at all.  A solution that fails its

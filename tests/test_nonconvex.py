@@ -197,6 +197,45 @@ def test_no_local_search_finds_anything_below_the_certified_minimum(supports, kw
     assert abs(sum(phys.values()) - r.energy) <= 1e-9 * scale
 
 
+def _unstable_count(scene) -> int:
+    """k from the independent pencil: eigenvalues of (K, mu G) [N] at or below P."""
+    bp = BeamProblem(scene)
+    K, G, _ = pencil(bp)
+    loads = sla.eigh(K, G, eigvals_only=True) * bp.EI / (bp.mu * bp.L**2)
+    return int(np.sum(loads <= scene.load.axial))
+
+
+@pytest.mark.slow
+def test_four_unstable_modes_certified_and_no_local_search_finds_anything_below():
+    """k = 4 (a clamped beam at 7.5 times its limit): the branch and bound over four
+    amplitudes certifies, and a multi-start search on the independent energy agrees."""
+    probe = Scene.from_dict(scene_dict("P1", q=-1e7, elements=8))
+    scene = Scene.from_dict(scene_dict("P1", q=-1e7, elements=8,
+                                       axial=7.5 * first_mode_load(BeamProblem(probe))))
+    assert _unstable_count(scene) == 4
+    r = solve(scene, "global")
+    glob = r.extra["global"]
+    assert r.status == "optimal", r.message
+    assert glob["unstable_modes"] == 4
+    scale = sum(abs(v) for v in r.energy_parts.values())
+    assert 0 <= glob["bound_gap"] <= 1e-8 * scale
+    found = multistart(scene, max(np.max(np.abs(r.w)), 1e-6), starts=24)
+    assert found >= glob["lower_bound"] - 1e-12 * scale
+    assert abs(found - r.energy) <= 1e-8 * scale
+    phys = BeamProblem(scene).energy_parts_physical(r.w, r.slope)
+    assert abs(sum(phys.values()) - r.energy) <= 1e-9 * scale
+
+
+def test_more_than_five_unstable_modes_are_refused_with_the_count():
+    probe = Scene.from_dict(scene_dict("P4", q=-1e7, elements=8))
+    scene = Scene.from_dict(scene_dict("P4", q=-1e7, elements=8,
+                                       axial=40.0 * first_mode_load(BeamProblem(probe))))
+    k = _unstable_count(scene)
+    assert k == 6      # lambda_n ~ n^2 lambda_1: 36 < 40 < 49
+    with pytest.raises(SceneError, match=f"with {k} unstable buckling modes.*at most 5"):
+        solve(scene, "global")
+
+
 def test_nonconvex_md_example_cost():
     """16 elements, P4, q = -1e7 N/m, P = 1.3e9 N: k = 1, a few dozen node programs."""
     r = solve(p4(), "global")

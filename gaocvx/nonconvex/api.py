@@ -28,10 +28,7 @@ __all__ = ["above_limit", "provably_convex", "solve_global_result"]
 
 log = logging.getLogger(__name__)
 
-# Branch and bound splits a k-dimensional box: beyond a few modes the number of
-# node programs explodes (measured: 1 mode ~50 nodes, 2 modes ~500).
-MAX_MODES = 3
-# The fast path (up to three modes) beyond the dense programs' 128 elements, up to
+# The fast path (up to minimum.MAX_MODES modes) beyond the dense programs' 128 elements, up to
 # here: measured at 2048 elements, P4 with one mode in 5 s, P1 with two in 54 s (one
 # thread); at 8192, P4 with one mode in 24 s.  Beyond, the Hermite pencil's Sturm
 # count (modecheck) and the node programs lose their accuracy (at 32768 elements
@@ -84,7 +81,8 @@ def solve_global_result(scene, elements=None, problem=None, solver=None):
     """
     from ..solve import _solve_exact, make_result
     from .bounds import check_bounded
-    from .minimum import MAX_ELEMENTS, fast_by_default, fast_eligible, solve_global
+    from .minimum import (MAX_ELEMENTS, MAX_MODES, fast_by_default, fast_eligible,
+                          solve_global)
     from .modes import MAX_UNSTABLE, unstable_modes
 
     t0 = time.perf_counter()

@@ -163,7 +163,7 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
             else:
                 open_.append((leaf.lower, next(counter), leaf))
         heapq.heapify(open_)
-    converged = True
+    converged, next_log = True, 100
     while open_:
         lower, _, leaf = open_[0]
         if best[0] - lower <= tol:
@@ -171,8 +171,9 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
         if nodes >= max_nodes or time.perf_counter() > deadline:
             converged = False
             break
-        if nodes % 100 == 0:
+        if nodes >= next_log:   # (nodes go up by two a split: no test of nodes % 100)
             log.info("branch and bound: %d nodes, gap %.3g", nodes, best[0] - lower)
+            next_log += 100
         heapq.heappop(open_)
         width = leaf.hi - leaf.lo
         if float(np.sum(c * width**2)) / 4.0 <= max(1e-2 * tol, 0.1 * leaf.noise):

@@ -54,7 +54,8 @@ from .modes import unstable_modes
 from .node import NodeProgram
 from .polish import feasible_energy, polish, reflections, to_mixed
 
-__all__ = ["solve_global", "GAP_TOL", "GAP_TARGET", "MAX_ELEMENTS", "to_mixed", "rescale_for"]
+__all__ = ["solve_global", "GAP_TOL", "GAP_TARGET", "MAX_ELEMENTS", "MAX_MODES", "to_mixed",
+           "rescale_for"]
 
 log = logging.getLogger(__name__)
 
@@ -64,6 +65,11 @@ log = logging.getLogger(__name__)
 # dozen nodes (the spec's example: 2.5e-10 of |Pi| in 47 nodes).
 GAP_TOL = 1e-8
 GAP_TARGET = 1e-11
+# Unstable modes the branch and bound takes, and its node programs at most with up
+# to three of them (node_limit: four times more per further mode).  Measured on
+# 32-64 elements: one mode ~50 nodes, two ~500, four 2700-4000 (P1 at 8 P_bar_h),
+# five 7800-12400 (P1 at 12, P4 at 26 P_bar_h).
+MAX_MODES = 5
 MAX_NODES = 4000
 # The energy scale's floor, as a fraction of the scene's own energy (see
 # scene_energy): an answer whose energy is far below it (a beam pressed flat onto
@@ -115,15 +121,24 @@ def rescale_for(dp, modes):
     return dp.rescaled(dp.W * size) if size > 1.0 else dp
 
 
-def time_limit(dp) -> float:
-    """The branch and bound's wall-clock limit [s] on the mesh of ``dp`` (TIME_ELEMENTS)."""
-    return bnb.TIME_LIMIT * max(1.0, (dp.n_nodes - 1) / TIME_ELEMENTS)
+def time_limit(dp, k: int = 1) -> float:
+    """The branch and bound's wall-clock limit [s] on the mesh of ``dp`` with ``k`` modes.
+
+    bnb.TIME_LIMIT per TIME_ELEMENTS elements, doubled for every mode beyond
+    three (each one multiplies the boxes to search).
+    """
+    return bnb.TIME_LIMIT * max(1.0, (dp.n_nodes - 1) / TIME_ELEMENTS) * 2.0 ** max(0, k - 3)
+
+
+def node_limit(k: int) -> int:
+    """Node programs at most with ``k`` unstable modes (MAX_NODES up to three)."""
+    return MAX_NODES * 4 ** max(0, k - 3)
 
 
 def fast_eligible(dp, k: int) -> bool:
     """The fast path (:mod:`.fast`, :mod:`.fast_contact` with an obstacle) serves up to
-    three unstable modes."""
-    return 1 <= k <= 3
+    MAX_MODES unstable modes."""
+    return 1 <= k <= MAX_MODES
 
 
 def fast_by_default(dp, k: int) -> bool:
@@ -131,7 +146,11 @@ def fast_by_default(dp, k: int) -> bool:
 
     Wherever it serves: faster than the dense programs for one or two modes
     (measured at 16-32 elements: 2-10 times), slower for three (45 s against
-    23 s at 16 elements), so those use it only beyond the dense programs.  With
+    23 s at 16 elements), so those use it only beyond the dense programs; for
+    four and five again wherever it serves (P1 at 8 P_bar_h, k = 4: 48 s against
+    48 s at 16 elements, 56 s against 335 s at 64; at k = 5 the dense programs'
+    bounds stalled at Clarabel's accuracy, 1.7e-7 of the energy scale, P1 at
+    12 P_bar_h on 32 elements, where the fast path certified 1e-11).  With
     an obstacle beyond DENSE_OBSTACLE_ELEMENTS: the dense programs, its ground
     truth, take 2.7 s a node at 128 elements (a channel took over 600 s,
     campaign scene 11:11), and on the seed-1 campaign at 8-32 elements with the
@@ -141,10 +160,11 @@ def fast_by_default(dp, k: int) -> bool:
     n_el = dp.n_nodes - 1
     if dp.contact == "obstacle":
         return fast_eligible(dp, k) and n_el > DENSE_OBSTACLE_ELEMENTS
-    return fast_eligible(dp, k) and (k <= 2 or n_el > MAX_ELEMENTS)
+    return fast_eligible(dp, k) and (k != 3 or n_el > MAX_ELEMENTS)
 
 
-def solve_global(dp, modes=None, max_nodes: int = MAX_NODES, fast: bool | None = None) -> tuple:
+def solve_global(dp, modes=None, max_nodes: int | None = None,
+                 fast: bool | None = None) -> tuple:
     """The certified global minimiser of ``dp`` (``P >= P_bar_h``, ``k >= 1`` unstable modes).
 
     Parameters
@@ -153,8 +173,8 @@ def solve_global(dp, modes=None, max_nodes: int = MAX_NODES, fast: bool | None =
         Built with ``check_convexity=False``.
     modes : Modes, optional
         Its unstable modes (computed when not given).
-    max_nodes : int
-        Node programs at most.
+    max_nodes : int, optional
+        Node programs at most (by default :func:`node_limit` of k).
     fast : bool, optional
         Node problems through the banded Newton machinery (:mod:`.fast`); by
         default wherever it serves (:func:`fast_eligible`) for one or two
@@ -181,12 +201,14 @@ def solve_global(dp, modes=None, max_nodes: int = MAX_NODES, fast: bool | None =
     check_bounded(dp)
     n_el = dp.n_nodes - 1
     modes = modes if modes is not None else unstable_modes(dp)
+    if max_nodes is None:
+        max_nodes = node_limit(modes.k)
     if fast is None:
         fast = fast_by_default(dp, modes.k)
     if n_el > MAX_ELEMENTS and not fast_eligible(dp, modes.k):
         raise SceneError("mesh.elements", f"the global method's dense node programs take at most "
-                         f"{MAX_ELEMENTS} elements (beyond, the fast path: up to three unstable "
-                         "modes)", n_el)
+                         f"{MAX_ELEMENTS} elements (beyond, the fast path: up to {MAX_MODES} "
+                         "unstable modes)", n_el)
     dp = rescale_for(dp, modes)
     prior = None
     for attempt in range(2):
@@ -236,7 +258,7 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     scale = max(sum(abs(v) for v in dp.energy_parts(start[1]).values()), floor, 1e-300)
     out = branch_and_bound(prog, feasible_energy(dp, prog), lo, hi, GAP_TARGET * scale,
                            max_nodes, start, leaves=None if prior is None else prior[0],
-                           time_limit=time_limit(dp))
+                           time_limit=time_limit(dp, k))
     if out.s is None:
         out.s = start[2]
     best_s, best_u, lam = polish(dp, prog, out.s, out.u, out.lam, lo, hi)
@@ -321,7 +343,7 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
              f"({gap / scale:.2g} of the energy scale)"]
     if not out.converged:
         notes.append(f"stopped at {out.nodes} nodes (limit {max_nodes} nodes, "
-                     f"{time_limit(dp):g} s)")
+                     f"{time_limit(dp, k):g} s)")
     if out.failed:
         notes.append(f"{out.failed} node programs not solved to optimality")
     if not modes.verified:
