@@ -147,9 +147,28 @@ class Equilibrium:
     def max(self) -> dict:
         return extremum(self.x, self.w, largest=True)
 
-    def deflection_at(self, x: float) -> float:
-        """Nodal-interpolated deflection at ``x`` [m] (linear between nodes)."""
-        return float(np.interp(x, self.x, self.w))
+    def deflection_at(self, x):
+        """Deflection at ``x`` [m]: the finite-element deflection, the Hermite cubic
+        through each element's nodal values and slopes (:func:`gaocvx.fem.eval_matrix`,
+        as ``Result.deflection`` and the pictures).
+
+        Parameters
+        ----------
+        x : float or array_like of float
+            Points of the beam [m] (``x[0] <= x <= x[-1]``).
+
+        Returns
+        -------
+        float or ndarray
+            A float for a scalar ``x``, else an array of its shape.
+        """
+        from ..fem import eval_matrix
+
+        points = np.asarray(x, float)
+        dofs = np.empty(2 * len(self.x))
+        dofs[0::2], dofs[1::2] = self.w, self.slope
+        values = eval_matrix(self.x, points.ravel()) @ dofs
+        return float(values[0]) if points.ndim == 0 else values.reshape(points.shape)
 
     def to_dict(self) -> dict:
         """One JSON object: energy, stability, extrema, amplitudes, nodal values."""
