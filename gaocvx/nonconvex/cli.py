@@ -6,7 +6,10 @@
 is not (a solver failure), 2 for bad input (raised as SceneError).  A path
 whose forces are partly out of range (three or more unstable modes, no
 minimiser) prints the others and exits 2, as a sweep with invalid values does;
-with inaccurate points too, the larger status, 2, as for several scenes.
+a force where a solver failed (SolverError) is reported likewise and makes it
+1.  With several kinds the larger status wins, as for a sweep or several
+scenes.  ``path --json`` writes a ``{"P", "status": "error", "error"}`` line
+for each such force, in its place, as ``sweep --json`` does for a value.
 
 Examples
 --------
@@ -56,7 +59,11 @@ def parse_range(text: str) -> np.ndarray:
         raise SceneError("--axial", "must be START:STOP:NUM, e.g. 0:3e9:31", text) from None
     if not (np.isfinite(start) and np.isfinite(stop)) or not 1 <= num <= 10000:
         raise SceneError("--axial", "needs finite START and STOP and 1 <= NUM <= 10000", text)
-    return np.linspace(start, stop, num)
+    values = np.linspace(start, stop, num)
+    if len(np.unique(values)) < num:   # (a path takes each force once)
+        raise SceneError("--axial", "repeats a force: START and STOP must differ when NUM > 1, "
+                         "by more than round-off", text)
+    return values
 
 
 def _count(n: int, one: str, many: str) -> str:
@@ -111,18 +118,22 @@ def _cmd_path(args) -> int:
     bar = ProgressBar("path") if sys.stderr.isatty() else None
     path = equilibrium_path(scene, values, x_c=args.at, progress=bar)
     if args.json:
-        for p in path.points:
-            print(_dumps(p), flush=True)
+        for record in path.records():   # every force: its points or its error
+            print(_dumps(record), flush=True)
     else:
-        skipped = f" ({len(path.errors)} skipped)" if path.errors else ""
+        counts = [f"{len(path.errors)} skipped"] if path.errors else []
+        counts += [f"{len(path.failures)} failed"] if path.failures else []
+        skipped = f" ({', '.join(counts)})" if counts else ""
         print(f"# {_count(len(path.points), 'equilibrium', 'equilibria')} at "
               f"{_count(len(path.P), 'axial force', 'axial forces')}{skipped}; "
               f"w_c = w({path.x_c:.4g} m)")
         for p in path.points:
             print(f"P {p['P']:12.5g} N  w_c {p['w_c']:12.5g} m  energy {p['energy']:13.6g} J  "
                   f"{'stable  ' if p['stable'] else 'unstable'}{'  global' if p['global'] else ''}")
-    for P, why in path.errors.items():
-        print(f"error: P = {P:.6g} N: {why}", file=sys.stderr)
+    for P in path.P:
+        why = path.errors.get(P, path.failures.get(P))
+        if why is not None:
+            print(f"error: P = {P:.6g} N: {why}", file=sys.stderr)
     if args.csv:
         with open(args.csv, "w", newline="") as fh:
             csv.writer(fh).writerows(path.rows())
@@ -132,9 +143,11 @@ def _cmd_path(args) -> int:
         P_bar = DiscreteProblem(scene, check_convexity=False).P_bar_h
         save_path_plot(path, args.plot, scene, P_bar)
     bad = [p for p in path.points if p["status"] != "optimal"]
-    # Skipped forces are input out of range (SceneError: no minimiser, too many modes),
-    # not a solver failure: 2, which outranks an inaccurate point's 1.
-    return EXIT_INPUT if path.errors else EXIT_SOLVER if bad else EXIT_OK
+    # Skipped forces are input out of range (SceneError: no minimiser, too many modes):
+    # 2; a solver's failure (SolverError) or an inaccurate point: 1.  The worse wins,
+    # as in a sweep (max over the values' codes).
+    return max(EXIT_INPUT if path.errors else EXIT_OK,
+               EXIT_SOLVER if path.failures or bad else EXIT_OK)
 
 
 def _path_error(error, message: str):

@@ -10,7 +10,12 @@ the mesh's structure is cached by the solvers.
 A characteristic deflection is tracked along the path: ``w`` at a point
 ``x_c`` (default: where the first buckling mode's deflection is largest:
 mid-span for P1 and P4, the tip for P3), signed, so that mirror-image branches
-stay apart.
+stay apart.  It is the finite-element deflection there (the Hermite cubic of
+the element, :meth:`.stationary.Equilibrium.deflection_at`).
+
+A force that cannot be traced does not end the path: one out of range is
+listed in ``errors``, one where a solver failed in ``failures``, and the
+other forces are traced all the same.
 
 Examples
 --------
@@ -30,7 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import SceneError
+from ..errors import SceneError, SolverError
 
 __all__ = ["EquilibriumPath", "equilibrium_path", "characteristic_point"]
 
@@ -66,24 +71,56 @@ class EquilibriumPath:
     x_c : float
         Where ``w_c`` is taken [m].
     errors : dict
-        P -> message, for the forces skipped: three or more unstable modes
-        (:func:`.stationary.equilibria` searches one or two), no minimiser, or
-        a mesh too fine above the limit.
+        P -> message, for the forces skipped as out of range (bad input, a
+        SceneError): three or more unstable modes (:func:`.stationary.equilibria`
+        searches one or two), no minimiser, or a mesh too fine above the limit.
+    failures : dict
+        P -> message, for the forces where a solver failed (a SolverError:
+        a fixed-amplitude solve failed at a zero of the reduced gradient, or
+        no equilibrium was found).  Such a force has no points; the others
+        are traced all the same.
     """
 
     P: list
     points: list
     x_c: float
     errors: dict = field(default_factory=dict)
+    failures: dict = field(default_factory=dict)
 
     def at(self, P) -> list:
         """The equilibria at force ``P``, sorted by energy."""
         return [p for p in self.points if p["P"] == P]
 
+    def _by_force(self) -> dict:
+        """P -> its points, every force of ``P`` in order (one pass over the points)."""
+        groups = {P: [] for P in self.P}
+        for p in self.points:
+            groups.setdefault(p["P"], []).append(p)
+        return groups
+
+    def records(self) -> list:
+        """Every force's outcome in the order of ``P``: its points (lowest energy first)
+        or, for a force skipped or failed, one ``{"P", "status": "error", "error"}``
+        (the JSON Lines of ``gaocvx path --json``)."""
+        out = []
+        for P, points in self._by_force().items():
+            why = self.errors.get(P, self.failures.get(P))
+            out.extend(points if why is None else
+                       [{"P": P, "status": "error", "error": why}])
+        return out
+
     def rows(self) -> list:
-        """CSV rows (header first)."""
-        keys = ["P", "w_c", "max_abs_w", "energy", "stable", "global", "amplitude", "status"]
-        return [keys] + [[p[k] for k in keys] for p in self.points]
+        """CSV rows (header first), one per record of :meth:`records`: booleans as
+        ``true``/``false`` (as in the JSON), a missing value (a force's error
+        row, an amplitude below the limit) as ``None`` (an empty cell)."""
+        keys = ["P", "w_c", "max_abs_w", "energy", "stable", "global", "amplitude", "status",
+                "error"]
+
+        def cell(value):
+            return ("true" if value else "false") if isinstance(value, (bool, np.bool_)) \
+                else value
+
+        return [keys] + [[cell(r.get(k)) for k in keys] for r in self.records()]
 
     def branches(self) -> list:
         """Equilibria joined into branches: each point is linked to the nearest
@@ -97,8 +134,8 @@ class EquilibriumPath:
         # A link across w_c = 0 longer than this is no continuation but another
         # branch (an obstacle's pressed branch ends where a free one begins).
         reach = 0.2 * max((abs(p["w_c"]) for p in self.points), default=0.0)
-        for P in self.P:
-            here = sorted(self.at(P), key=lambda p: p["w_c"])
+        for here in self._by_force().values():
+            here = sorted(here, key=lambda p: p["w_c"])
             taken = set()
             new_open = []
             for pt in here:
@@ -132,8 +169,10 @@ def equilibrium_path(scene, P_values, elements: int | None = None, x_c: float | 
     scene : Scene or Mapping
         A dict with the structure of a scene file is validated into a Scene.
     P_values : array_like of float
-        The axial forces [N] (compression positive), finite; a sequence or
-        1-d array, or one number (a path of one force).
+        The axial forces [N] (compression positive), finite and each once
+        (a repeated force is refused: ``list(dict.fromkeys(P_values))``
+        drops repeats keeping the order); a sequence or 1-d array, or one
+        number (a path of one force).
     elements : int, optional
         Overrides ``scene.mesh.elements``; checked as :func:`gaocvx.solve`
         checks it.
@@ -151,23 +190,33 @@ def equilibrium_path(scene, P_values, elements: int | None = None, x_c: float | 
         searched), no minimiser (Euler-Bernoulli, or a Gao beam with
         ``E_alpha = 0``, at or above ``P_bar_h``; ``P_hat_h`` on a bonded
         foundation), or a mesh too fine for the search above the limit.
+        Forces where it raises :class:`~gaocvx.errors.SolverError` are listed
+        in ``failures``; the path goes on at the next force either way.
 
     Raises
     ------
     SceneError
         Before any work, naming the argument (``scene``, ``P_values[i]``,
-        ``elements``, ``x_c``) and the offending value.
+        ``elements``, ``x_c``) and the offending value; a force given twice
+        is refused naming its second place, ``P_values[j]``.
     """
     from ..scene import check_solve_arguments, number
     from .stationary import equilibria, numbers_of
 
     scene = check_solve_arguments(scene, "global", elements)
     P_values = numbers_of("P_values", P_values)
+    first = {}
+    for j, P in enumerate(P_values):
+        i = first.setdefault(P, j)
+        if i != j:
+            # (at(P) and branches() key the points by force: a repeat would merge them)
+            raise SceneError(f"P_values[{j}]", f"repeats P_values[{i}]; give each force once "
+                             "(list(dict.fromkeys(P_values)) drops repeats)", P)
     if x_c is None:
         x_c = characteristic_point(scene, elements)
     else:
         x_c = number("x_c", x_c, lo=0.0, hi=scene.beam.length)
-    points, errors = [], {}
+    points, errors, failures = [], {}, {}
     seeds = np.zeros(0)
     for done, P in enumerate(P_values, start=1):
         try:
@@ -175,6 +224,11 @@ def equilibrium_path(scene, P_values, elements: int | None = None, x_c: float | 
         except SceneError as exc:
             errors[P] = str(exc)
             log.info("path: P = %.4g N skipped: %s", P, exc)
+            eqs = []
+        except SolverError as exc:
+            # One force's failure is that force's: the others are still traced.
+            failures[P] = str(exc)
+            log.warning("path: P = %.4g N failed: %s", P, exc)
             eqs = []
         lowest = min((e.energy for e in eqs), default=None)
         # Mirror images are both global minimisers: ties within round-off count.
@@ -185,8 +239,10 @@ def equilibrium_path(scene, P_values, elements: int | None = None, x_c: float | 
                            "stable": e.stable, "global": e.energy <= lowest + tie,
                            "amplitude": e.amplitudes[0] if e.amplitudes else None,
                            "status": e.status})
-        # Warm start: the next force samples these amplitudes first.
-        seeds = np.array([e.amplitude_m[0] for e in eqs if e.amplitudes])
+        # Warm start: the next force samples these amplitudes first (a force
+        # with no equilibria passes on the last ones found).
+        if eqs:
+            seeds = np.array([e.amplitude_m[0] for e in eqs if e.amplitudes])
         if progress:
             progress(done, len(P_values))
-    return EquilibriumPath(P_values, points, x_c, errors)
+    return EquilibriumPath(P_values, points, x_c, errors, failures)
