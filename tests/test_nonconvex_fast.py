@@ -153,7 +153,7 @@ def test_residual_gram_from_first_differences_is_the_hermite_residuals(supports,
     assert noise < 1e-3 * np.max(np.abs(expected))
 
 
-# --------------------------------------------------------------------- step 2: k <= 3
+# --------------------------------------------------------------------- step 2: k <= 5
 def _programs(supports, axial, elements, **kw):
     from gaocvx.nonconvex.fast import FastProgram
     from gaocvx.nonconvex.minimum import rescale_for
@@ -167,7 +167,8 @@ def _programs(supports, axial, elements, **kw):
     return dp, m, FastProgram(dp, m), NodeProgram(dp, m)
 
 
-@pytest.mark.parametrize("supports, axial, k", [("P1", 1.1e10, 2), ("P2", 1.5e10, 3)])
+@pytest.mark.parametrize("supports, axial, k", [("P1", 1.1e10, 2), ("P2", 1.5e10, 3),
+                                                ("P1", 3.5e10, 4), ("P4", 3.2e10, 5)])
 def test_fast_node_values_gradients_and_hessians_agree_with_the_dense_programs(supports, axial, k):
     dp, m, fast, dense = _programs(supports, axial, 16, q=-5e7)
     assert m.k == k
@@ -188,7 +189,8 @@ def test_fast_node_values_gradients_and_hessians_agree_with_the_dense_programs(s
     # other's minimiser (a beam with amplitudes in the box), and the relaxations'
     # values agree (they differ by the fast one's margin delta sum s_i^2 >= 0: its
     # Psi carries the c_i with delta, the dense one's A_rho the exact (p - lambda_i) / 2)
-    for lo, hi in ((-2 * np.ones(k), 2 * np.ones(k)), (np.r_[-3.0, -1.0, 0.5][:k], np.r_[-1.0, 1.0, 2.0][:k])):
+    for lo, hi in ((-2 * np.ones(k), 2 * np.ones(k)),
+                   (np.r_[-3.0, -1.0, 0.5, -0.5, 0.0][:k], np.r_[-1.0, 1.0, 2.0, 0.5, 1.0][:k])):
         a, b = fast.solve_box(lo, hi), dense.solve_box(lo, hi)
         assert a.ok and b.ok
         scale = abs(b.value) + 1.0

@@ -194,6 +194,11 @@ def test_deflection_between_nodes_is_the_hermite_interpolant():
         # (the linear interpolant is far from it: the test tells them apart)
         assert abs(np.interp(X, e.x, e.w) - expected) > 1e-3 * abs(expected)
     assert e.deflection_at(np.array([X, 0.5])).shape == (2,)
+    # at the ends the supports' zeros; off the beam the cubic would extrapolate: refused
+    assert e.deflection_at(np.array([0.0, 1.0])) == pytest.approx([0.0, 0.0], abs=1e-15)
+    for off in (-0.1, 1.2):
+        with pytest.raises(SceneError, match="off the beam"):
+            e.deflection_at(off)
     g = solve(scene, "global")
     assert eqs[0].deflection_at(X) == pytest.approx(g.deflection(X), rel=1e-6)
 

