@@ -18,7 +18,8 @@ buckling modes (docs/nonconvex.md):
 
 from .api import above_limit, solve_global_result
 from .path import EquilibriumPath, equilibrium_path
-from .stationary import Equilibrium, equilibria
+from .equilibrium import Equilibrium
+from .stationary import equilibria
 from .modes import unstable_modes
 
 __all__ = ["above_limit", "solve_global_result", "unstable_modes", "Equilibrium", "equilibria",

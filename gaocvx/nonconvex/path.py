@@ -11,7 +11,7 @@ A characteristic deflection is tracked along the path: ``w`` at a point
 ``x_c`` (default: where the first buckling mode's deflection is largest:
 mid-span for P1 and P4, the tip for P3), signed, so that mirror-image branches
 stay apart.  It is the finite-element deflection there (the Hermite cubic of
-the element, :meth:`.stationary.Equilibrium.deflection_at`).
+the element, :meth:`.equilibrium.Equilibrium.deflection_at`).
 
 A force that cannot be traced does not end the path: one out of range is
 listed in ``errors``, one where a solver failed in ``failures``, and the
@@ -200,8 +200,8 @@ def equilibrium_path(scene, P_values, elements: int | None = None, x_c: float | 
         ``elements``, ``x_c``) and the offending value; a force given twice
         is refused naming its second place, ``P_values[j]``.
     """
-    from ..scene import check_solve_arguments, number
-    from .stationary import equilibria, numbers_of
+    from ..scene import check_solve_arguments, number, numbers_of
+    from .stationary import equilibria
 
     scene = check_solve_arguments(scene, "global", elements)
     P_values = numbers_of("P_values", P_values)

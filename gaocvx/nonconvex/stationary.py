@@ -43,19 +43,16 @@ from __future__ import annotations
 
 import logging
 import math
-import numbers
 import time
-from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.optimize as so
 
 from ..discrete import DiscreteProblem
 from ..errors import SceneError, SolverError
-from ..result import extremum
-from ..scene import check_solve_arguments, number, whole
+from ..scene import check_solve_arguments, numbers_of, whole
 from .bounds import check_bounded, equilibrium_box
+from .equilibrium import Equilibrium
 
 __all__ = ["Equilibrium", "equilibria", "GRID", "MAX_GRID"]
 
@@ -70,125 +67,6 @@ MAX_GRID = 100_000
 # |F'(s)| |s| at a zero, relative to the equilibrium's energy scale (sum of
 # |energy parts|), at most (the node programs' own accuracy is about 1e-10).
 ROOT_TOL = 1e-8
-
-
-def numbers_of(key: str, values) -> list:
-    """``values`` as a list of finite floats, or SceneError naming ``key`` and the bad entry.
-
-    A sequence, 1-d array or other iterable of real numbers; one number is a
-    list of one (as numpy's ``array_like``).  Strings, mappings, bools, NaN
-    and infinities are refused.
-
-    Examples
-    --------
-    >>> numbers_of("P_values", np.array([0.0, 2e9])), numbers_of("P_values", 1e9)
-    ([0.0, 2000000000.0], [1000000000.0])
-    >>> numbers_of("P_values", [1e9, float("nan")])
-    Traceback (most recent call last):
-    ...
-    gaocvx.errors.SceneError: P_values[1]: must be finite (got nan)
-    """
-    if isinstance(values, (numbers.Number, np.generic)) or \
-            (isinstance(values, np.ndarray) and values.ndim == 0):
-        return [number(key, values)]
-    if isinstance(values, (str, bytes, Mapping)) or not isinstance(values, Iterable):
-        raise SceneError(key, "must be a number or a sequence of numbers", values)
-    return [number(f"{key}[{i}]", v) for i, v in enumerate(values)]
-
-
-@dataclass
-class Equilibrium:
-    """One equilibrium of the discrete beam.
-
-    Attributes
-    ----------
-    energy : float
-        Total potential energy [J].
-    stable : bool
-        A local minimum of the energy (``F'' > 0``).
-    amplitudes : list of float
-        Its unstable modes' amplitudes ``s`` (non-dimensional).
-    x, w, slope : ndarray
-        Nodes [m], deflection [m], slope.
-    residual : float
-        ``|F'(s)| |s|`` relative to the energy scale (0 for the convex case);
-        at a kink of ``F`` or an end of the admissible amplitudes (an obstacle
-        holding the beam), ``|F'|`` times the width of the bracket that holds
-        the equilibrium.
-    status : str
-        "optimal" when the fixed-amplitude solve and the zero are accurate,
-        else "inaccurate".
-    P : float
-        The axial force [N].
-    """
-
-    energy: float
-    stable: bool
-    amplitudes: list
-    x: np.ndarray
-    w: np.ndarray
-    slope: np.ndarray
-    residual: float
-    status: str
-    P: float
-    curvature: float = field(default=math.nan)
-    W: float = field(default=math.nan)
-
-    @property
-    def amplitude_m(self) -> list:
-        """The amplitudes in metres (``s W``): comparable between axial forces."""
-        return [a * self.W for a in self.amplitudes]
-
-    @property
-    def min(self) -> dict:
-        return extremum(self.x, self.w, largest=False)
-
-    @property
-    def max(self) -> dict:
-        return extremum(self.x, self.w, largest=True)
-
-    def deflection_at(self, x):
-        """Deflection at ``x`` [m]: the finite-element deflection, the Hermite cubic
-        through each element's nodal values and slopes (:func:`gaocvx.fem.eval_matrix`,
-        as ``Result.deflection`` and the pictures).
-
-        Parameters
-        ----------
-        x : float or array_like of float
-            Points of the beam [m] (``x[0] <= x <= x[-1]``).
-
-        Returns
-        -------
-        float or ndarray
-            A float for a scalar ``x``, else an array of its shape.
-
-        Raises
-        ------
-        SceneError
-            For a point off the beam (the cubic would extrapolate).
-        """
-        from ..fem import eval_matrix
-
-        points = np.asarray(x, float)
-        ends = (float(self.x[0]), float(self.x[-1]))
-        slack = 1e-12 * (ends[1] - ends[0])
-        off = ~((points >= ends[0] - slack) & (points <= ends[1] + slack))
-        if np.any(off):
-            raise SceneError("x", f"off the beam [{ends[0]:g}, {ends[1]:g}] m",
-                             float(points[off].ravel()[0]))
-        points = np.clip(points, *ends)
-        dofs = np.empty(2 * len(self.x))
-        dofs[0::2], dofs[1::2] = self.w, self.slope
-        values = eval_matrix(self.x, points.ravel()) @ dofs
-        return float(values[0]) if points.ndim == 0 else values.reshape(points.shape)
-
-    def to_dict(self) -> dict:
-        """One JSON object: energy, stability, extrema, amplitudes, nodal values."""
-        return {"energy": self.energy, "stability": "stable" if self.stable else "unstable",
-                "P": self.P, "min": self.min, "max": self.max, "amplitudes": self.amplitudes,
-                "status": self.status, "residual": self.residual,
-                "nodes": {"x": self.x.tolist(), "w": self.w.tolist(),
-                          "slope": self.slope.tolist()}}
 
 
 def _convex_equilibrium(scene, elements, dp) -> list:

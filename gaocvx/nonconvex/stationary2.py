@@ -42,7 +42,8 @@ import time
 
 import numpy as np
 
-from .stationary import ROOT_TOL, Equilibrium
+from .equilibrium import Equilibrium
+from .stationary import ROOT_TOL
 
 __all__ = ["find_plane", "GRID2"]
 

@@ -36,11 +36,12 @@ from .files import MAX_FILE_BYTES, MAX_NESTING, load_scene, parse_set, read_text
 from .parts import Beam, Foundation, Load, MeshSpec, Obstacle, SolveOptions
 from .values import (CONTROLS, EFFECTIVE_LENGTH, FOUNDATION_KINDS, MAX_ELEMENTS, MAX_POINT_FORCES,
                      METHODS, MINIMIZERS, MODELS, SOLVERS, SUPPORTS, TRANSFORMS, number,
-                     profile_at, whole)
+                     numbers_of, profile_at, whole)
 
 __all__ = [
     "Beam", "Load", "Foundation", "Obstacle", "MeshSpec", "SolveOptions", "Scene",
-    "load_scene", "parse_set", "read_text", "check_solve_arguments", "number", "whole",
+    "load_scene", "parse_set", "read_text", "check_solve_arguments", "number", "numbers_of",
+    "whole",
     "profile_at", "MODELS", "SUPPORTS", "METHODS", "TRANSFORMS", "CONTROLS", "FOUNDATION_KINDS",
     "MINIMIZERS", "SOLVERS", "MAX_ELEMENTS", "MAX_POINT_FORCES", "EFFECTIVE_LENGTH",
     "MAX_FILE_BYTES", "MAX_NESTING",

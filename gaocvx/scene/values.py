@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 import numbers
+from collections.abc import Iterable
 from typing import Mapping
 
 import numpy as np
@@ -86,6 +87,30 @@ def whole(key: str, value, lo: int, hi: int) -> int:
     if not lo <= v <= hi:
         raise SceneError(key, f"must be between {lo} and {hi}", v)
     return v
+
+
+def numbers_of(key: str, values) -> list:
+    """``values`` as a list of finite floats (:func:`number` each), or SceneError naming ``key`` and the bad entry.
+
+    A sequence, 1-d array or other iterable of real numbers; one number is a
+    list of one (as numpy's ``array_like``).  Strings, mappings, bools, NaN
+    and infinities are refused.
+
+    Examples
+    --------
+    >>> numbers_of("P_values", np.array([0.0, 2e9])), numbers_of("P_values", 1e9)
+    ([0.0, 2000000000.0], [1000000000.0])
+    >>> numbers_of("P_values", [1e9, float("nan")])
+    Traceback (most recent call last):
+    ...
+    gaocvx.errors.SceneError: P_values[1]: must be finite (got nan)
+    """
+    if isinstance(values, (numbers.Number, np.generic)) or \
+            (isinstance(values, np.ndarray) and values.ndim == 0):
+        return [number(key, values)]
+    if isinstance(values, (str, bytes, Mapping)) or not isinstance(values, Iterable):
+        raise SceneError(key, "must be a number or a sequence of numbers", values)
+    return [number(f"{key}[{i}]", v) for i, v in enumerate(values)]
 
 
 def _choice(key: str, value, options) -> str:
