@@ -259,9 +259,14 @@ def structure_key(dp: DiscreteProblem) -> tuple:
     return (dp.scene.beam.supports, dp.xi.tobytes(), bool(dp.needs_gao or dp.p != 0), contact)
 
 
-def structure_of(dp: DiscreteProblem) -> MixedStructure:
-    """The (cached) :class:`MixedStructure` of a problem's mesh, supports and terms."""
-    key = structure_key(dp)
+def structure_of(dp: DiscreteProblem, slope: bool = False) -> MixedStructure:
+    """The (cached) :class:`MixedStructure` of a problem's mesh, supports and terms.
+
+    ``slope``: with the slope rows even where the energy has no slope term (the
+    buckling pencil's ``G`` is that term's form, whatever the energy holds).
+    """
+    supports, xi, has_slope, contact = structure_key(dp)
+    key = (supports, xi, has_slope or slope, contact)
     s = _STRUCTURES.get(key)
     if s is None:
         supports, _, slope, contact = key

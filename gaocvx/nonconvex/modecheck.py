@@ -113,10 +113,9 @@ def _slope_rows(mf):
     """
     if mf.has_slope:
         return mf.structure
-    from ..mixed import MixedStructure, structure_key
+    from ..mixed import structure_of
 
-    supports, _, _, contact = structure_key(mf.dp)
-    return MixedStructure(mf.dp.xi, supports, True, contact)
+    return structure_of(mf.dp, slope=True)
 
 
 def _mixed(dp, V):
