@@ -4,6 +4,7 @@
     OPENBLAS_NUM_THREADS=1 python benchmarks/nonconvex.py fine [--output FILE] [--sizes ...] [--cases ...]
     python benchmarks/nonconvex.py paths [--output docs/nonconvex-paths.png] [--elements 12]
     OPENBLAS_NUM_THREADS=1 python benchmarks/nonconvex.py modes [--output FILE] [--sizes ...]
+    OPENBLAS_NUM_THREADS=1 python benchmarks/nonconvex.py dual [--output FILE] [--sizes ...] [--cases ...]
 
 ``table``: for each scene and mesh, the global method's run time, node
 programs, unstable modes and certified gap (in J and relative to the energy
@@ -13,6 +14,10 @@ for nonconvex.md's P4 example, the k = 2 P1 example and the P4 obstacle example
 (``--cases``) at 128 to 8192 elements (``--sizes``); ``modes``: four and five
 unstable modes (MODE_CASES) at 8 to 64 elements, with the node programs that
 ``solve_global`` picks (the fast path; no second try by the other kind)
+``dual``: the dual bound (:mod:`gaocvx.nonconvex.dual`) against the branch
+and bound alone on the same scene (CASES without obstacle, ``--cases``; the
+fast path), the two run times measured in one run, their ratio and the
+difference of their energies relative to the scale
 (one BLAS thread: on a shared machine OpenBLAS's threads made a dot product
 of 10^4 numbers take 24 ms instead of 6 us).  ``paths``: the
 equilibrium path of each support (P1..P4) with and without a transverse load,
@@ -91,6 +96,43 @@ def table(out, cases=CASES, sizes=(8, 16, 32, 64, 128), fast=False):
     print(text)
 
 
+def dual_table(out, cases, sizes):
+    """The global method with and without the dual bound's shortcut (same scenes, one run)."""
+    import gaocvx.nonconvex.dual as dual
+    from gaocvx.nonconvex.minimum import solve_global
+
+    def run(s, shortcut):
+        saved = dual.shortcut
+        if not shortcut:
+            dual.shortcut = lambda dp, prog, start, lo, hi, tol: (None, start)
+        try:
+            t0 = time.perf_counter()
+            dp, raw, info = solve_global(DiscreteProblem(s, check_convexity=False))
+            t = time.perf_counter() - t0
+        finally:
+            dual.shortcut = saved
+        scale = sum(abs(v) for v in raw["mixed"].energy_parts(raw["z"]).values()) * dp.E0
+        return t, info, raw, sum(raw["mixed"].energy_parts(raw["z"]).values()) * dp.E0, scale
+
+    lines = ["| scene | N | k | certificate | time [s] | branch and bound alone [s] | ratio | "
+             "gap / scale | its gap / scale | \|ΔE\| / scale | status |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for label, kw in cases:
+        for n in sizes:
+            s = scene(n=n, **kw)
+            t1, i1, r1, e1, sc = run(s, True)
+            t2, i2, r2, e2, _ = run(s, False)
+            lines.append(f"| {label} | {n} | {i1['unstable_modes']} | {i1['certificate']} | "
+                         f"{t1:.2f} | {t2:.2f} | {t2 / t1:.1f} | {i1['bound_gap'] / sc:.1e} | "
+                         f"{i2['bound_gap'] / sc:.1e} | {abs(e1 - e2) / sc:.1e} | "
+                         f"{r1['status']} / {r2['status']} |")
+            print(lines[-1], file=sys.stderr, flush=True)
+    text = "\n".join(lines) + "\n"
+    if out:
+        Path(out).write_text(text)
+    print(text)
+
+
 def paths(out, n):
     import matplotlib
     matplotlib.use("Agg")
@@ -130,7 +172,7 @@ DEFAULT_SIZES = "128,512,2048,8192"
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("what", choices=["table", "fine", "paths", "modes"])
+    ap.add_argument("what", choices=["table", "fine", "paths", "modes", "dual"])
     ap.add_argument("--output")
     ap.add_argument("--elements", type=int, default=12)
     ap.add_argument("--sizes", default=DEFAULT_SIZES,
@@ -147,6 +189,11 @@ def main(argv=None):
     elif args.what == "modes":
         sizes = "8,16,32,64" if args.sizes == DEFAULT_SIZES else args.sizes
         table(args.output, MODE_CASES, tuple(int(n) for n in sizes.split(",")), fast=None)
+    elif args.what == "dual":
+        sizes = "16,128,1024,4096" if args.sizes == DEFAULT_SIZES else args.sizes
+        idx = "0,2,3" if args.cases == "0,2,5" else args.cases
+        dual_table(args.output, [CASES[int(i)] for i in idx.split(",")],
+                   tuple(int(n) for n in sizes.split(",")))
     else:
         paths(args.output or "docs/nonconvex-paths.png", args.elements)
 

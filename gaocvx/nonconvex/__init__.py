@@ -6,6 +6,8 @@ buckling modes (docs/nonconvex.md):
 ``modes``      the k unstable modes of (K, mu G), G-normalised
 ``bounds``     the box of mode amplitudes containing every minimiser; refusal
                of energies unbounded below
+``dual``       a second certificate: the Gao term's tangents (canonical dual
+               bound), tried before the branch and bound
 ``node``       the convex node programs (dense CVXPY + Clarabel, DPP)
 ``bnb``        branch and bound with a certified gap
 ``minimum``    the global minimiser, certified (``polish``: the answer

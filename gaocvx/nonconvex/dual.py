@@ -1,0 +1,241 @@
+"""A second certificate of global optimality: the Gao term's tangents (the canonical dual bound).
+
+At every Gauss point ``q`` of the Gao rule the quartic is a square of the
+squared slope ``y_q = s_q^2``, and a square lies above each of its tangents,
+``y^2 >= 2 t y - t^2`` for every ``t``.  So for any ``t``
+
+    Pi(u) >= L_t(u) = 1/2 u'M(t) u - f'u + F(u) - a/12 sum_q w_q t_q^2,
+    M(t)  = K - p G + (a/3) B1' diag(w t) B1   (+ c N' W N for a bonded bed),
+
+with ``F`` the unilateral foundation (convex).  When ``M(t)`` is positive
+definite, ``L_t`` is convex, and its minimum, computed to a certified accuracy,
+is a lower bound on the global minimum of ``Pi``.  Taken at a candidate's own
+squared slopes, ``t = y(u*)``, the tangents touch: ``L_t(u*) = Pi(u*)`` and the
+gradients agree, so a stationary ``u*`` is the minimiser of ``L_t``, and the
+bound meets ``Pi(u*)``: ``u*`` is the global minimiser.  This is D. Y. Gao's
+canonical duality (the "triality" criterion) in the discrete form.
+
+It is a *sufficient* condition, independent of the buckling modes and of the
+branch and bound: ``M(y*)`` is ``Pi``'s Hessian with the Gao term's curvature
+taken a third, so it holds for a beam buckled into one dominant mode under a
+transverse load (measured: one or two unstable modes, all four supports, at up
+to 5 P_bar_h), and fails where several modes compete (P1 at 5 P_bar_h with
+three; a bonded bed from two) or by symmetry (without load ``M(y*)`` is
+singular: its null vector is the answer, whose mirror image is a minimiser
+too).  Where it fails, :mod:`.minimum` runs the branch and bound as before.
+
+The bound, for any ``x`` and ``r = grad L_t(x)``: ``L_t(u) >= L_t(x) + r'(u -
+x) + 1/2 (u - x)'M (u - x)`` (``F`` convex), so ``min L_t >= L_t(x) - 1/2 r'M^-1
+r``, with ``L_t(x) = Pi(x) - a/12 sum w (y(x) - t)^2`` (the tangents' exact
+error, evaluated as accurately as the energy itself).  Positive definiteness
+is decided by the signs of an ``LDL'`` factorisation's pivots (Sylvester's
+law of inertia, :func:`.modecheck.count_below`, the test that counts the
+unstable modes), at a margin ``m``: then every point whose energy is within
+the gap ``g`` of the minimum lies within ``sqrt(2 g / m)`` (in the norm
+``sqrt(u'G u)``) of the minimiser of ``L_t``.
+
+Examples
+--------
+>>> from gaocvx.scene import Scene
+>>> from gaocvx.discrete import DiscreteProblem
+>>> from gaocvx.newton import solve_newton
+>>> scene = Scene.from_dict({"beam": {"model": "gao", "supports": "P4", "length": 1.0,
+...     "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1, "width": 1.0},
+...     "load": {"q": -1e7, "axial": 1.3e9}, "mesh": {"elements": 16}})
+>>> dp = DiscreteProblem(scene, check_convexity=False)
+>>> import numpy as np
+>>> tangent_bound(dp, np.zeros(dp.n)) is None   # w = 0: M = K - p G, not definite
+True
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..linalg import BandedCholesky, NotPositiveDefinite
+from .modecheck import count_below
+
+__all__ = ["DualBound", "tangent_matrix", "tangent_bound", "shortcut", "UNIQUE_RADIUS"]
+
+log = logging.getLogger(__name__)
+
+# The dual bound certifies a unique minimiser when every point within its gap
+# lies this close to the answer, relative to its size sqrt(u'G u) (measured on
+# loaded beams, one or two modes, 16-1024 elements: 4e-5 at most).
+UNIQUE_RADIUS = 1e-3
+# The Sturm count's error in an eigenvalue of (M(t), G), per eps N^4 times the
+# largest coefficient of M's slope term (max(p, a t / 3)): measured on nonconvex.md's
+# P4 example against shift-invert Lanczos, 1.5e-3 at 1024 and 2048 elements, 0.01 at
+# 4096, 0.013 at 8192 (there 0.145 of an eigenvalue of 0.229); taken eight times
+# larger.  It ends the dual bound near 8192 elements, where the count no longer
+# tells the margin's sign.
+ROUNDOFF = 0.1
+# Newton steps on L_t (convex; quadratic without a unilateral foundation: one step).
+MAX_STEPS = 30
+
+
+@dataclass(frozen=True)
+class DualBound:
+    """A certified lower bound on the global minimum (non-dimensional energies).
+
+    ``lower`` bounds ``min Pi`` from below; ``x`` minimises ``L_t`` (to the
+    accuracy that ``lower`` accounts for); ``margin`` is a verified lower bound
+    on the smallest eigenvalue of ``(M(t), G)``.
+    """
+
+    lower: float
+    x: np.ndarray
+    margin: float
+
+    def radius(self, upper: float) -> float:
+        """Every ``u`` with ``Pi(u) <= upper`` lies within this G-norm distance of ``x``.
+
+        Such a ``u`` has ``L_t(u) <= upper``, and ``L_t`` grows at least like
+        ``margin / 2`` times the squared distance from its minimiser, which
+        lies within the same distance of ``x`` (``L_t(x) <= upper`` too).
+        """
+        return 2.0 * math.sqrt(2.0 * max(upper - self.lower, 0.0) / self.margin)
+
+
+def tangent_matrix(dp, t) -> sp.csr_matrix:
+    """``M(t)``: the quadratic part of ``L_t`` (with a bonded bed's stiffness)."""
+    M = dp.K + dp.B1T @ sp.diags(dp.wq_gao * (dp.a / 3.0 * np.asarray(t) - dp.p)) @ dp.B1
+    if dp.contact == "foundation" and dp.bilateral:
+        M = M + dp.NqT @ sp.diags(dp.c * dp.wq_c) @ dp.Nq
+    return M.tocsr()
+
+
+def _tangent_error(dp, u, t):
+    """``Pi(u) - L_t(u) = a/12 sum w (y - t)^2`` and its gradient."""
+    s = dp.B1 @ u
+    d = s * s - t
+    return dp.a / 12.0 * float(dp.wq_gao @ (d * d)), (dp.a / 3.0) * (dp.B1T @ (dp.wq_gao * d * s))
+
+
+def _hessian(dp, M, u):
+    """``L_t``'s (generalised) Hessian: ``M`` plus the unilateral foundation's active part."""
+    if dp.contact != "foundation" or dp.bilateral:
+        return M
+    active = ((dp.g - dp.Nq @ u) > 0).astype(float)
+    return (M + dp.NqT @ sp.diags(dp.c * dp.wq_c * active) @ dp.Nq).tocsr()
+
+
+def _smallest(M, G) -> float | None:
+    """An estimate of the smallest eigenvalue of ``(M, G)`` (``M`` positive definite)."""
+    from scipy.sparse.linalg import ArpackError, eigsh
+    try:
+        val = eigsh(M.tocsc(), k=1, M=G.tocsc(), sigma=0.0, which="LM",
+                    return_eigenvectors=False)
+    except (ArpackError, RuntimeError, ValueError, np.linalg.LinAlgError):
+        return None
+    return float(val[0]) if np.isfinite(val[0]) else None
+
+
+def tangent_bound(dp, u) -> DualBound | None:
+    """The canonical dual bound with tangents at the squared slopes of ``u`` (no obstacle).
+
+    Parameters
+    ----------
+    dp : DiscreteProblem
+        A scene without an obstacle, in its own non-dimensional units.
+    u : ndarray
+        Free Hermite DOFs of the candidate (the tangents' points).
+
+    Returns
+    -------
+    DualBound or None
+        None when ``M(t)`` is not verified positive definite (the bound does
+        not apply: no conclusion) or the minimisation of ``L_t`` fails.
+    """
+    if dp.contact == "obstacle" or dp.n == 0 or not dp.a > 0:
+        return None
+    u = np.asarray(u, float)
+    t = (dp.B1 @ u) ** 2
+    M = tangent_matrix(dp, t)
+    try:
+        chol = BandedCholesky(M)
+    except NotPositiveDefinite:
+        return None
+    estimate = _smallest(M, dp.G)
+    if estimate is None or not estimate > 0:
+        return None
+    # Sylvester's count at half the estimate: no eigenvalue of (M, G) below it,
+    # less the count's own round-off (ROUNDOFF, measured in the Hermite DOFs).
+    margin = 0.5 * estimate
+    allowance = ROUNDOFF * np.finfo(float).eps * (dp.n_nodes - 1) ** 4 * max(
+        dp.p, dp.a / 3.0 * float(np.max(t, initial=0.0)), 1.0)
+    if not margin > allowance or count_below(M, dp.G, margin) != 0:
+        return None
+    margin -= allowance
+
+    def phi(x):
+        err, derr = _tangent_error(dp, x, t)
+        return dp.energy(x) - err, dp.gradient(x) - derr
+
+    x = u.copy()
+    value, r = phi(x)
+    for _ in range(MAX_STEPS):
+        H = _hessian(dp, M, x)
+        try:
+            step = (chol if H is M else BandedCholesky(H)).solve(-r)
+        except NotPositiveDefinite:   # (cannot be: H >= M > 0)
+            return None
+        trial = x + step
+        v2, r2 = phi(trial)
+        if not v2 <= value + 1e-15 * abs(value):
+            break
+        moved = float(np.max(np.abs(step))) <= 1e-14 * max(float(np.max(np.abs(x))), 1e-300)
+        x, value, r = trial, v2, r2
+        if moved:
+            break
+    lower = value - 0.5 * float(r @ chol.solve(r))
+    if not math.isfinite(lower):
+        return None
+    return DualBound(lower=float(lower), x=x, margin=float(margin))
+
+
+def shortcut(dp, prog, start, lo, hi, tol: float):
+    """The global minimiser certified by the dual bound alone, or None (then: branch and bound).
+
+    The best first candidate ``start = (energy, u, s, lam)`` of
+    :func:`.minimum.solve_global` is polished to a local minimiser, and the
+    tangent bound taken at it.  Taken only when the gap is within ``tol`` and
+    every global minimiser lies within :data:`UNIQUE_RADIUS` of the answer's
+    size (a unique minimiser; mirror images and close competitors are left to
+    the branch and bound, which finds them all).
+
+    Returns
+    -------
+    tuple
+        ``(result, start)``: a :class:`.bnb.BnBResult` with no nodes, or None;
+        and the start for the branch and bound, the polished point where lower.
+    """
+    from .bnb import BnBResult
+    from .polish import polish
+    e0, u0, s0, lam0 = start
+    if dp.contact == "obstacle" or not np.any(s0):
+        return None, start
+    s, u, lam = polish(dp, prog, s0, u0, lam0, lo, hi)
+    e = dp.energy(u)
+    if not e <= e0:
+        return None, start
+    better = (e, u, s, lam)
+    bound = tangent_bound(dp, u)
+    if bound is None:
+        log.info("global: the dual bound does not apply (M(t) not positive definite)")
+        return None, better
+    size = math.sqrt(max(float(u @ (dp.G @ u)), 0.0))
+    # every global minimiser (energy <= e) lies within this distance of the answer
+    radius = bound.radius(e)
+    if not (e - bound.lower <= tol and radius <= UNIQUE_RADIUS * size):
+        log.info("global: dual bound gap %.3g (tolerance %.3g), radius %.3g of the size; "
+                 "branch and bound", e - bound.lower, tol, radius / max(size, 1e-300))
+        return None, better
+    log.info("global: certified by the dual bound (gap %.3g, margin %.3g)", e - bound.lower,
+             bound.margin)
+    return BnBResult(upper=e, lower=bound.lower, u=u, s=s, lam=lam, nodes=0, leaves=[]), better

@@ -1,0 +1,117 @@
+"""The dual bound (gaocvx.nonconvex.dual): a lower bound below every energy, and its certificates.
+
+References from outside the code under test: the discrete energy of
+tests/nonconvex_independent.py (written from physics.md, long double) at
+random points and at the local minima of its own multi-start search, and the
+branch and bound's answer (the dual bound switched off) for the same scene.
+"""
+
+import numpy as np
+import pytest
+
+from conftest import scene_dict
+from nonconvex_independent import Discrete
+
+from gaocvx import DiscreteProblem, Scene, solve
+from gaocvx.nonconvex import dual
+from gaocvx.nonconvex.modes import unstable_modes
+
+
+def scene_at(supports, q, factor, elements=16, foundation=None):
+    """A Gao scene ``factor`` times its convexity limit (P_hat_h for a bonded bed)."""
+    d = scene_dict(supports=supports, q=q, axial=1.0, elements=elements)
+    if foundation is not None:
+        d["foundation"] = foundation
+    dp = DiscreteProblem(Scene.from_dict(d), check_convexity=False)
+    d["load"]["axial"] = factor * (dp.P_hat_h if dp.bilateral else dp.P_bar_h)
+    return Scene.from_dict(d)
+
+
+def answer_dofs(result, dp):
+    return dp.from_physical(result.w, result.slope)
+
+
+LOADED = [("P1", -1e6, 1.5), ("P1", -1e5, 3.0), ("P2", -1e6, 3.0), ("P3", -1e5, 3.0),
+          ("P4", -1e6, 1.5)]
+
+
+@pytest.mark.parametrize("supports,q,factor", LOADED)
+def test_dual_bound_lies_below_every_energy_of_the_independent_formulation(supports, q, factor):
+    scene = scene_at(supports, q, factor)
+    dp = DiscreteProblem(scene, check_convexity=False)
+    res = solve(scene, "global")
+    u = answer_dofs(res, dp)
+    bound = dual.tangent_bound(dp, u)
+    assert bound is not None
+    en = Discrete(scene, W=dp.W)
+    e_star = en(u)[0]                                      # in E0, as dp's energies
+    scale = en.parts_scale(u)
+    # the bound meets the answer's energy (it is the global minimum) ...
+    assert abs(e_star - bound.lower) <= 1e-9 * scale
+    # ... and no point lies below it: random points around the answer and far away
+    rng = np.random.default_rng(7)
+    size = np.max(np.abs(u))
+    for spread in (1e-3, 0.1, 1.0, 3.0):
+        for _ in range(40):
+            x = u + spread * size * rng.normal(size=dp.n)
+            assert en(x)[0] >= bound.lower - 1e-9 * scale
+    # ... nor any point of the independent local searches (converged or not)
+    for x0 in en.starts(rng, 16, size):
+        x, e, _ = en.local_min(x0, maxiter=200)
+        assert e >= bound.lower - 1e-9 * scale
+
+
+def test_dual_certificate_gives_the_branch_and_bounds_answer(monkeypatch):
+    scene = scene_at("P1", -1e5, 3.0, elements=32)          # two unstable modes
+    fast = solve(scene, "global")
+    g = fast.extra["global"]
+    assert fast.status == "optimal" and g["certificate"] == "dual bound" and g["nodes"] == 0
+    assert g["unique"] is True and g["unstable_modes"] == 2
+    monkeypatch.setattr(dual, "shortcut", lambda dp, prog, start, lo, hi, tol: (None, start))
+    ref = solve(scene, "global")
+    r = ref.extra["global"]
+    assert ref.status == "optimal" and r["certificate"] == "branch and bound" and r["nodes"] > 0
+    gap = max(g["bound_gap"], r["bound_gap"], 0.0) + 1e-9 * abs(ref.energy)
+    assert abs(fast.energy - ref.energy) <= gap
+    assert np.max(np.abs(fast.w - ref.w)) <= 1e-6 * np.max(np.abs(ref.w))
+    # either lower bound lies below the other answer's energy
+    assert g["lower_bound"] <= ref.energy + 1e-9 * abs(ref.energy)
+    assert r["lower_bound"] <= fast.energy + 1e-9 * abs(fast.energy)
+
+
+def test_a_local_minimum_that_is_not_global_gets_no_dual_certificate():
+    # A P4 beam on a bonded bed 1.5 P_hat_h, loaded downwards: the independent
+    # search finds two minima (buckled with and against the load).
+    scene = scene_at("P4", -1e6, 1.5, elements=32,
+                     foundation={"kind": "bilateral", "gap": 0.0, "stiffness": 1e9})
+    dp = DiscreteProblem(scene, check_convexity=False)
+    en = Discrete(scene, W=dp.W)
+    modes = unstable_modes(dp)
+    amp = 10 * float(np.max(np.abs(solve(scene, "global").w))) / dp.W
+    phi = modes.phi[:, 0] / np.max(np.abs(modes.phi[:, 0]))
+    minima = sorted((en.local_min(sign * amp * phi)[1::-1] for sign in (1.0, -1.0)),
+                    key=lambda m: m[0])
+    (e_glob, u_glob), (e_loc, u_loc) = minima
+    scale = en.parts_scale(u_glob)
+    assert e_loc > e_glob + 1e-3 * scale                   # two distinct minima
+    at_global = dual.tangent_bound(dp, u_glob)
+    assert at_global is not None and abs(at_global.lower - e_glob) <= 1e-9 * scale
+    at_local = dual.tangent_bound(dp, u_loc)
+    # at the higher minimum the bound cannot certify it: M(t) is indefinite there,
+    # or its bound lies below the global minimum
+    assert at_local is None or at_local.lower <= e_glob + 1e-9 * scale
+
+
+@pytest.mark.parametrize("supports", ["P1", "P4"])
+def test_without_load_the_mirror_minima_are_left_to_the_branch_and_bound(supports):
+    res = solve(scene_at(supports, 0.0, 1.5), "global")
+    g = res.extra["global"]
+    assert res.status == "optimal"
+    assert g["certificate"] == "branch and bound" and g["unique"] is False
+
+
+def test_obstacle_scenes_never_take_the_dual_bound():
+    d = scene_dict(supports="P4", q=-1e6, axial=1.0, elements=16)
+    d["obstacle"] = {"gap": 0.001}
+    dp = DiscreteProblem(Scene.from_dict(d), check_convexity=False)
+    assert dual.tangent_bound(dp, np.ones(dp.n)) is None
