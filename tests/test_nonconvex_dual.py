@@ -115,3 +115,34 @@ def test_obstacle_scenes_never_take_the_dual_bound():
     d["obstacle"] = {"gap": 0.001}
     dp = DiscreteProblem(Scene.from_dict(d), check_convexity=False)
     assert dual.tangent_bound(dp, np.ones(dp.n)) is None
+
+
+@pytest.mark.parametrize("supports,q,factor,elements", [("P4", -1e6, 1.5, 16), ("P1", -1e5, 3.0, 64),
+                                                         ("P3", -1e5, 3.0, 32)])
+def test_proved_margin_lies_below_the_smallest_eigenvalue(supports, q, factor, elements):
+    """The proved margin of M(t) - m G >= 0 is below lambda_min(M, G) of a dense solve
+    (scipy.linalg.eigh), and above zero where it is used."""
+    import scipy.linalg as sla
+    import scipy.sparse as sp
+    scene = scene_at(supports, q, factor, elements)
+    dp = DiscreteProblem(scene, check_convexity=False)
+    u = answer_dofs(solve(scene, "global"), dp)
+    t = (dp.B1 @ u) ** 2
+    M = dual.tangent_matrix(dp, t)
+    lam = sla.eigh(M.toarray(), dp.G.toarray(), eigvals_only=True)[0]
+    S = sp.diags(1.0 / np.sqrt(dp.G.diagonal()))
+    floor = dual.metric_floor(dp.G, S)
+    assert 0 < floor <= sla.eigvalsh((S @ dp.G @ S).toarray())[0]
+    for m in (0.5 * lam, 0.9 * lam):
+        proved = dual.proved_margin(dp, M, t, m, S, floor)
+        assert 0 < proved <= m < lam
+    # above the smallest eigenvalue nothing is proved
+    assert dual.proved_margin(dp, M, t, 1.01 * lam, S, floor) == -np.inf
+
+
+def test_one_free_dof():
+    """A P2 beam of one element has one free DOF (the slope at the pinned end): the
+    eigenvalue estimate must not crash (scipy's eigsh refuses k >= N)."""
+    scene = scene_at("P2", -1e5, 2.0, elements=1)
+    res = solve(scene, "global")
+    assert res.status == "optimal" and res.extra["global"]["unique"] is True

@@ -86,6 +86,7 @@ class BnBResult:
     leaves: list = field(repr=False)
     converged: bool = True
     failed: int = 0
+    certificate: str = "branch and bound"   # (dual.shortcut's: "dual bound", no nodes)
 
     @property
     def gap(self) -> float:

@@ -26,13 +26,15 @@ too).  Where it fails, :mod:`.minimum` runs the branch and bound as before.
 
 The bound, for any ``x`` and ``r = grad L_t(x)``: ``L_t(u) >= L_t(x) + r'(u -
 x) + 1/2 (u - x)'M (u - x)`` (``F`` convex), so ``min L_t >= L_t(x) - 1/2 r'M^-1
-r``, with ``L_t(x) = Pi(x) - a/12 sum w (y(x) - t)^2`` (the tangents' exact
+r >= L_t(x) - r'G^-1 r / (2 m)`` once ``M >= m G`` is proved (below), with ``L_t(x) = Pi(x) - a/12 sum w (y(x) - t)^2`` (the tangents' exact
 error, evaluated as accurately as the energy itself).  Positive definiteness
-is decided by the signs of an ``LDL'`` factorisation's pivots (Sylvester's
-law of inertia, :func:`.modecheck.count_below`, the test that counts the
-unstable modes), at a margin ``m``: then every point whose energy is within
-the gap ``g`` of the minimum lies within ``sqrt(2 g / m)`` (in the norm
-``sqrt(u'G u)``) of the minimiser of ``L_t``.
+with a margin ``m`` (``M - m G >= 0``) is proved by a Cholesky factorisation
+of ``M - m G`` and its backward error (:func:`proved_margin`): a bound, not
+an estimate, so it gives out on fine meshes (measured: at 512 to 1024
+elements for a margin of 0.1, 256 for 0.005), where the branch and bound
+serves.  Then every point whose energy is within the gap ``g`` of the minimum
+lies within ``sqrt(2 g / m)`` (in the norm ``sqrt(u'G u)``) of the minimiser
+of ``L_t``.
 
 Examples
 --------
@@ -55,12 +57,13 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..linalg import BandedCholesky, NotPositiveDefinite
-from .modecheck import count_below
 
-__all__ = ["DualBound", "tangent_matrix", "tangent_bound", "shortcut", "UNIQUE_RADIUS"]
+__all__ = ["DualBound", "tangent_matrix", "tangent_bound", "proved_margin", "metric_floor",
+           "shortcut", "UNIQUE_RADIUS"]
 
 log = logging.getLogger(__name__)
 
@@ -68,13 +71,9 @@ log = logging.getLogger(__name__)
 # lies this close to the answer, relative to its size sqrt(u'G u) (measured on
 # loaded beams, one or two modes, 16-1024 elements: 4e-5 at most).
 UNIQUE_RADIUS = 1e-3
-# The Sturm count's error in an eigenvalue of (M(t), G), per eps N^4 times the
-# largest coefficient of M's slope term (max(p, a t / 3)): measured on nonconvex.md's
-# P4 example against shift-invert Lanczos, 1.5e-3 at 1024 and 2048 elements, 0.01 at
-# 4096, 0.013 at 8192 (there 0.145 of an eigenvalue of 0.229); taken eight times
-# larger.  It ends the dual bound near 8192 elements, where the count no longer
-# tells the margin's sign.
-ROUNDOFF = 0.1
+EPS = np.finfo(float).eps
+# Eigenvalue estimates by a dense solve up to this many DOFs, shift-invert Lanczos beyond.
+DENSE = 200
 # Newton steps on L_t (convex; quadratic without a unilateral foundation: one step).
 MAX_STEPS = 30
 
@@ -102,11 +101,17 @@ class DualBound:
         return 2.0 * math.sqrt(2.0 * max(upper - self.lower, 0.0) / self.margin)
 
 
-def tangent_matrix(dp, t) -> sp.csr_matrix:
-    """``M(t)``: the quadratic part of ``L_t`` (with a bonded bed's stiffness)."""
-    M = dp.K + dp.B1T @ sp.diags(dp.wq_gao * (dp.a / 3.0 * np.asarray(t) - dp.p)) @ dp.B1
+def tangent_matrix(dp, t, magnitude: bool = False) -> sp.csr_matrix:
+    """``M(t)``: the quadratic part of ``L_t`` (with a bonded bed's stiffness).
+
+    With ``magnitude``, the same sums of absolute values (``|K| + |B1|' diag(w
+    |a t/3 - p|) |B1|``, ...): what the round-off of assembling ``M`` is relative to.
+    """
+    f = abs if magnitude else (lambda X: X)
+    sigma = dp.wq_gao * (dp.a / 3.0 * np.asarray(t) - dp.p)
+    M = f(dp.K) + f(dp.B1T) @ sp.diags(f(sigma)) @ f(dp.B1)
     if dp.contact == "foundation" and dp.bilateral:
-        M = M + dp.NqT @ sp.diags(dp.c * dp.wq_c) @ dp.Nq
+        M = M + f(dp.NqT) @ sp.diags(np.broadcast_to(dp.c * dp.wq_c, dp.wq_c.shape)) @ f(dp.Nq)
     return M.tocsr()
 
 
@@ -126,14 +131,86 @@ def _hessian(dp, M, u):
 
 
 def _smallest(M, G) -> float | None:
-    """An estimate of the smallest eigenvalue of ``(M, G)`` (``M`` positive definite)."""
+    """An estimate of the smallest eigenvalue of ``(M, G)`` (``M`` positive definite).
+
+    Only a trial value: :func:`proved_margin` proves or refuses it.
+    """
     from scipy.sparse.linalg import ArpackError, eigsh
     try:
-        val = eigsh(M.tocsc(), k=1, M=G.tocsc(), sigma=0.0, which="LM",
-                    return_eigenvectors=False)
-    except (ArpackError, RuntimeError, ValueError, np.linalg.LinAlgError):
+        if M.shape[0] <= DENSE:
+            val = sla.eigh(M.toarray(), G.toarray(), eigvals_only=True, subset_by_index=[0, 0])
+        else:
+            val = eigsh(M.tocsc(), k=1, M=G.tocsc(), sigma=0.0, which="LM",
+                        return_eigenvectors=False)
+    except (ArpackError, RuntimeError, ValueError, TypeError, np.linalg.LinAlgError):
         return None
     return float(val[0]) if np.isfinite(val[0]) else None
+
+
+def _gamma(n: int) -> float:
+    """Higham's ``gamma_n = n eps / (1 - n eps)``."""
+    return n * EPS / (1.0 - n * EPS)
+
+
+def _factor_error(A, S) -> float | None:
+    """A bound on ``||S E S||_2`` where ``A + E = R'R`` exactly, ``R`` the computed banded
+    Cholesky factor of ``A`` (None: the factorisation breaks down).
+
+    Higham, *Accuracy and Stability of Numerical Algorithms* (2002), theorem 10.3:
+    ``|E| <= gamma_{b+1} |R'||R|`` entrywise (``b`` the bandwidth: the length of
+    every inner product); the symmetric ``S |R'||R| S`` has its 2-norm below its
+    largest row sum (doubled for the round-off of forming it).
+    """
+    try:
+        chol = BandedCholesky(A)
+    except NotPositiveDefinite:
+        return None
+    R = abs(chol.factor())
+    P = S @ (R.T @ R) @ S
+    return 2.0 * _gamma(chol.u + 1) * float(np.max(np.asarray(P.sum(axis=1)), initial=0.0))
+
+
+def _row_norm(A, S) -> float:
+    """The largest row sum of ``S |A| S``: a bound on its 2-norm (``A`` symmetric)."""
+    return float(np.max(np.asarray(abs(S @ A @ S).sum(axis=1)), initial=0.0))
+
+
+def metric_floor(G, S) -> float:
+    """A proved lower bound on the smallest eigenvalue of ``S G S`` (0: none)."""
+    Gs = (S @ G @ S).tocsr()
+    eye = sp.identity(G.shape[0], format="csr")
+    estimate = _smallest(Gs, eye)
+    if estimate is None or not estimate > 0:
+        return 0.0
+    g = 0.5 * estimate
+    err = _factor_error(Gs - g * eye, eye)
+    if err is None:
+        return 0.0
+    # (forming S G S - g I: three roundings an entry)
+    return max(g - err - _gamma(4) * (_row_norm(G, S) + g), 0.0)
+
+
+def proved_margin(dp, M, t, m: float, S, floor: float) -> float:
+    """A proved lower bound on the smallest eigenvalue of ``(M(t), G)`` in exact arithmetic,
+    from a Cholesky factorisation of ``M - m G`` (``-inf``: none).
+
+    ``M - m G`` as computed plus the factor's backward error ``E`` is
+    ``R'R >= 0``; the computed matrix differs from the exact one by the round-off
+    of assembling it, at most ``gamma_16`` of its magnitudes (sums of at most ten
+    products of three factors, then two additions), which also covers the
+    difference between ``K`` and the curvature form the energy is evaluated by.  So
+    the exact ``M - m G >= -(e_1 + e_2) S^-2 >= -(e_1 + e_2) / floor G``, with
+    ``floor`` a proved lower bound of the smallest eigenvalue of ``S G S``.
+    """
+    if not floor > 0:
+        return -math.inf
+    A = (M - m * dp.G).tocsr()
+    e1 = _factor_error(A, S)
+    if e1 is None:
+        return -math.inf
+    e2 = _gamma(16) * (_row_norm(tangent_matrix(dp, t, magnitude=True), S)
+                       + abs(m) * _row_norm(dp.G, S))
+    return m - (e1 + e2) / floor
 
 
 def tangent_bound(dp, u) -> DualBound | None:
@@ -164,14 +241,13 @@ def tangent_bound(dp, u) -> DualBound | None:
     estimate = _smallest(M, dp.G)
     if estimate is None or not estimate > 0:
         return None
-    # Sylvester's count at half the estimate: no eigenvalue of (M, G) below it,
-    # less the count's own round-off (ROUNDOFF, measured in the Hermite DOFs).
-    margin = 0.5 * estimate
-    allowance = ROUNDOFF * np.finfo(float).eps * (dp.n_nodes - 1) ** 4 * max(
-        dp.p, dp.a / 3.0 * float(np.max(t, initial=0.0)), 1.0)
-    if not margin > allowance or count_below(M, dp.G, margin) != 0:
+    # Proved at half the estimate, in the metric of G's diagonal (Jacobi).
+    S = sp.diags(1.0 / np.sqrt(dp.G.diagonal()))
+    margin = proved_margin(dp, M, t, 0.5 * estimate, S, metric_floor(dp.G, S))
+    if not margin > 0:
+        log.info("global: M(t) not proved positive definite (estimate %.3g, proved %.3g)",
+                 estimate, margin)
         return None
-    margin -= allowance
 
     def phi(x):
         err, derr = _tangent_error(dp, x, t)
@@ -189,11 +265,13 @@ def tangent_bound(dp, u) -> DualBound | None:
         v2, r2 = phi(trial)
         if not v2 <= value + 1e-15 * abs(value):
             break
-        moved = float(np.max(np.abs(step))) <= 1e-14 * max(float(np.max(np.abs(x))), 1e-300)
+        stalled = float(np.max(np.abs(step))) <= 1e-14 * max(float(np.max(np.abs(x))), 1e-300)
         x, value, r = trial, v2, r2
-        if moved:
+        if stalled:
             break
-    lower = value - 0.5 * float(r @ chol.solve(r))
+    # (M >= margin G is proved, its computed factor only approximate: the residual's
+    # dual norm is taken in G, r'M^-1 r <= r'G^-1 r / margin)
+    lower = value - 0.5 * float(r @ BandedCholesky(dp.G).solve(r)) / margin
     if not math.isfinite(lower):
         return None
     return DualBound(lower=float(lower), x=x, margin=float(margin))
@@ -227,7 +305,7 @@ def shortcut(dp, prog, start, lo, hi, tol: float):
     better = (e, u, s, lam)
     bound = tangent_bound(dp, u)
     if bound is None:
-        log.info("global: the dual bound does not apply (M(t) not positive definite)")
+        log.info("global: the dual bound does not apply (M(t) not proved positive definite)")
         return None, better
     size = math.sqrt(max(float(u @ (dp.G @ u)), 0.0))
     # every global minimiser (energy <= e) lies within this distance of the answer
@@ -238,4 +316,5 @@ def shortcut(dp, prog, start, lo, hi, tol: float):
         return None, better
     log.info("global: certified by the dual bound (gap %.3g, margin %.3g)", e - bound.lower,
              bound.margin)
-    return BnBResult(upper=e, lower=bound.lower, u=u, s=s, lam=lam, nodes=0, leaves=[]), better
+    return BnBResult(upper=e, lower=bound.lower, u=u, s=s, lam=lam, nodes=0, leaves=[],
+                     certificate="dual bound"), better

@@ -350,8 +350,8 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     gap = upper - out.lower
     # The gap is the certificate, however the search ended (the node limit too).
     ok = -GAP_TOL * scale <= gap <= GAP_TOL * scale and out.failed == 0 and modes.verified
-    how = (f"branch and bound: {out.nodes} node programs" if out.nodes else
-           "the Gao term's tangents (dual bound)")
+    how = (f"branch and bound: {out.nodes} node programs" if out.certificate != "dual bound"
+           else "the Gao term's tangents (dual bound)")
     notes = [f"{how}, certified gap {gap * dp.E0:.3g} J ({gap / scale:.2g} of the energy scale)"]
     if not out.converged:
         notes.append(f"stopped at {out.nodes} nodes (limit {max_nodes} nodes, "
@@ -369,7 +369,7 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     info = {"unstable_modes": int(k), "mode_loads": [float(x) for x in modes.loads],
             "bound_gap": float(gap * dp.E0), "lower_bound": float(out.lower * dp.E0),
             "unique": not alternatives, "nodes": int(out.nodes),
-            "certificate": "branch and bound" if out.nodes else "dual bound",
+            "certificate": out.certificate,
             "amplitudes": [float(x) for x in best_s],
             "alternatives": [{"u": a[1], "energy": float(a[0] * dp.E0),
                               "amplitudes": [float(x) for x in a[2]]} for a in alternatives]}
