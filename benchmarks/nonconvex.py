@@ -80,6 +80,14 @@ def _global(s, fast):
                 rel=info["bound_gap"] / scale, unique=info["unique"], status=raw["status"])
 
 
+def _write(lines, out):
+    """The table's lines printed, and written to ``out`` if given."""
+    text = "\n".join(lines) + "\n"
+    if out:
+        Path(out).write_text(text)
+    print(text)
+
+
 def table(out, cases=CASES, sizes=(8, 16, 32, 64, 128), fast=False):
     lines = ["| scene | N | k | nodes | time [s] | gap [J] | gap / scale | unique | status |",
              "|---|---|---|---|---|---|---|---|---|"]
@@ -90,10 +98,7 @@ def table(out, cases=CASES, sizes=(8, 16, 32, 64, 128), fast=False):
                          f"{g['gap']:.2e} | {g['rel']:.1e} | "
                          f"{'yes' if g['unique'] else 'no'} | {g['status']} |")
             print(lines[-1], file=sys.stderr, flush=True)
-    text = "\n".join(lines) + "\n"
-    if out:
-        Path(out).write_text(text)
-    print(text)
+    _write(lines, out)
 
 
 def dual_table(out, cases, sizes):
@@ -115,7 +120,7 @@ def dual_table(out, cases, sizes):
         return t, info, raw, sum(raw["mixed"].energy_parts(raw["z"]).values()) * dp.E0, scale
 
     lines = ["| scene | N | k | certificate | time [s] | branch and bound alone [s] | ratio | "
-             "gap / scale | its gap / scale | \|ΔE\| / scale | status |",
+             "gap / scale | its gap / scale | \\|ΔE\\| / scale | status |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for label, kw in cases:
         for n in sizes:
@@ -127,10 +132,7 @@ def dual_table(out, cases, sizes):
                          f"{i2['bound_gap'] / sc:.1e} | {abs(e1 - e2) / sc:.1e} | "
                          f"{r1['status']} / {r2['status']} |")
             print(lines[-1], file=sys.stderr, flush=True)
-    text = "\n".join(lines) + "\n"
-    if out:
-        Path(out).write_text(text)
-    print(text)
+    _write(lines, out)
 
 
 def paths(out, n):
