@@ -1,5 +1,6 @@
 import copy
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -54,6 +55,28 @@ def thesis_scene():
 
 
 # A scene file of the thesis's beam on a foundation (table 4.13a), for CLI tests.
+# A new-user trial's Euler-Bernoulli P4 beam: EI = 2.1e11 * 0.1 * 0.02^3 / 12 =
+# 1.4e4 N m^2, L = 3 m, Euler load pi^2 EI / L^2 = 1.535e4 N (above it no minimiser).
+TRIAL_EULER = math.pi**2 * (2.1e11 * 0.1 * 0.02**3 / 12) / 3.0**2
+
+
+def trial_eb_toml(q: str) -> str:
+    """The trial beam's scene file on 16 elements, with ``q`` as written in TOML."""
+    return f"""[beam]
+model = "euler-bernoulli"
+supports = "P4"
+length = 3.0
+E = 2.1e11
+nu = 0.3
+half_thickness = 0.01
+width = 0.1
+[load]
+q = {q}
+[mesh]
+elements = 16
+"""
+
+
 FOUNDATION_TOML = """
 [beam]
 model = "gao"

@@ -17,6 +17,8 @@ import math
 import numpy as np
 import pytest
 
+from conftest import trial_eb_toml
+
 from gaocvx import DiscreteProblem, Scene, solve
 from gaocvx.cli import main
 from gaocvx.errors import SceneError
@@ -29,19 +31,7 @@ EB = {"beam": {"model": "euler-bernoulli", "supports": "P4", "length": 3.0, "E":
 EI = 2.1e11 * 0.1 * 0.02**3 / 12
 EULER = math.pi**2 * EI / 3.0**2   # 1.535e4 N: the P4 beam's buckling load
 
-EB_TOML = """[beam]
-model = "euler-bernoulli"
-supports = "P4"
-length = 3.0
-E = 2.1e11
-nu = 0.3
-half_thickness = 0.01
-width = 0.1
-[load]
-q = [[0.0, 0.0], [3.0, -1000.0]]
-[mesh]
-elements = 16
-"""
+EB_TOML = trial_eb_toml("[[0.0, 0.0], [3.0, -1000.0]]")
 
 
 def eb_scene(**beam):

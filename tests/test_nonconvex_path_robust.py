@@ -12,10 +12,11 @@ minimiser), and the contract's convention for a failed item (multi-scene
 
 import csv
 import json
-import math
 
 import numpy as np
 import pytest
+
+from conftest import TRIAL_EULER, trial_eb_toml
 
 import gaocvx.nonconvex.stationary as stationary
 from gaocvx import Scene, SceneError, SolverError, solve
@@ -40,21 +41,9 @@ q = -1e7
 [mesh]
 elements = 8
 """
-# An Euler-Bernoulli P4 beam: Euler load pi^2 EI / L^2 = 1.535e4 N; above it no minimiser.
-EB_TOML = """[beam]
-model = "euler-bernoulli"
-supports = "P4"
-length = 3.0
-E = 2.1e11
-nu = 0.3
-half_thickness = 0.01
-width = 0.1
-[load]
-q = -1000.0
-[mesh]
-elements = 16
-"""
-EULER = math.pi**2 * (2.1e11 * 0.1 * 0.02**3 / 12) / 3.0**2
+# The trial's Euler-Bernoulli P4 beam (conftest) under a uniform load.
+EB_TOML = trial_eb_toml("-1000.0")
+EULER = TRIAL_EULER
 
 
 @pytest.fixture
