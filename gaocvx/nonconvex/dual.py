@@ -26,8 +26,9 @@ too).  Where it fails, :mod:`.minimum` runs the branch and bound as before.
 
 The bound, for any ``x`` and ``r = grad L_t(x)``: ``L_t(u) >= L_t(x) + r'(u -
 x) + 1/2 (u - x)'M (u - x)`` (``F`` convex), so ``min L_t >= L_t(x) - 1/2 r'M^-1
-r >= L_t(x) - r'G^-1 r / (2 m)`` once ``M >= m G`` is proved (below), with ``L_t(x) = Pi(x) - a/12 sum w (y(x) - t)^2`` (the tangents' exact
-error, evaluated as accurately as the energy itself).  Positive definiteness
+r >= L_t(x) - r'G^-1 r / (2 m)`` once ``M >= m G`` is proved (below), with
+``L_t(x) = Pi(x) - a/12 sum w (y(x) - t)^2`` (the tangents' exact error,
+evaluated as accurately as the energy itself).  Positive definiteness
 with a margin ``m`` (``M - m G >= 0``) is proved by a Cholesky factorisation
 of ``M - m G`` and its backward error (:func:`proved_margin`): a bound, not
 an estimate, so it gives out on fine meshes (measured: at 512 to 1024
@@ -38,15 +39,22 @@ of ``L_t``.
 
 Examples
 --------
->>> from gaocvx.scene import Scene
->>> from gaocvx.discrete import DiscreteProblem
->>> from gaocvx.newton import solve_newton
+nonconvex.md's P4 example, buckled under its load (one unstable mode):
+
+>>> import numpy as np
+>>> from gaocvx import DiscreteProblem, Scene, solve
 >>> scene = Scene.from_dict({"beam": {"model": "gao", "supports": "P4", "length": 1.0,
 ...     "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1, "width": 1.0},
 ...     "load": {"q": -1e7, "axial": 1.3e9}, "mesh": {"elements": 16}})
+>>> r = solve(scene, "global")
+>>> r.extra["global"]["certificate"], r.extra["global"]["nodes"]
+('dual bound', 0)
 >>> dp = DiscreteProblem(scene, check_convexity=False)
->>> import numpy as np
->>> tangent_bound(dp, np.zeros(dp.n)) is None   # w = 0: M = K - p G, not definite
+>>> u = dp.from_physical(r.w, r.slope)
+>>> bound = tangent_bound(dp, u)
+>>> bool(abs(dp.energy(u) - bound.lower) <= 1e-12 * abs(dp.energy(u)))
+True
+>>> tangent_bound(dp, np.zeros(dp.n)) is None   # at w = 0, M = K - p G: indefinite
 True
 """
 
