@@ -213,7 +213,7 @@ def run_case(case: Case, starts: int = 24, seed: int = 0) -> dict:
     glob = r.extra.get("global", {})
     rec.update(message=r.message, k_reported=glob.get("unstable_modes"),
                nodes=glob.get("nodes"), gap=glob.get("bound_gap"), unique=glob.get("unique"),
-               energy=r.energy)
+               certificate=glob.get("certificate"), energy=r.energy)
     if not gao and k >= 1 and r.status == "optimal":
         rec["violations"].append(("unbounded", "an Euler-Bernoulli scene above its limit solved"))
     if glob.get("unstable_modes") != k:
