@@ -178,10 +178,11 @@ def main(argv=None):
     ap.add_argument("--output")
     ap.add_argument("--elements", type=int, default=12)
     ap.add_argument("--sizes", default=DEFAULT_SIZES,
-                    help="fine, modes: the meshes (comma-separated element counts; modes: "
-                         "8,16,32,64 by default)")
+                    help="fine, modes, dual: the meshes (comma-separated element counts; modes: "
+                         "8,16,32,64 by default; dual: 16,128,1024,4096)")
     ap.add_argument("--cases", default="0,2,5",
-                    help="fine: indices into CASES (default: P4, P1 with k = 2, P4 on an obstacle)")
+                    help="fine, dual: indices into CASES (fine's default: P4, P1 with k = 2, P4 "
+                         "on an obstacle; dual's: 0,2,3, the scenes without an obstacle)")
     args = ap.parse_args(argv)
     if args.what == "table":
         table(args.output)

@@ -358,8 +358,10 @@ class Result:
                 for s in self.support_reactions))
         glob = self.extra.get("global")
         if glob:  # the global method's certificate (gaocvx.nonconvex)
+            how = ("by the dual bound" if glob.get("certificate") == "dual bound"
+                   else f"{glob['nodes']} nodes")
             lines.append(f"global   {glob['unstable_modes']} unstable mode(s), certified gap "
-                         f"{glob['bound_gap']:.3g} J, {glob['nodes']} nodes"
+                         f"{glob['bound_gap']:.3g} J, {how}"
                          + ("" if glob["unique"] else
                             f", NOT unique ({len(glob.get('alternatives', [])) + 1} minimisers)"))
         verdict = self.extra.get("cvm", {}).get("verdict")

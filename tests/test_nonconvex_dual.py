@@ -146,3 +146,18 @@ def test_one_free_dof():
     scene = scene_at("P2", -1e5, 2.0, elements=1)
     res = solve(scene, "global")
     assert res.status == "optimal" and res.extra["global"]["unique"] is True
+
+
+@pytest.mark.parametrize("P", [1.4951307588620628e9, 1.55e9])
+def test_dual_bound_lies_below_the_reported_energy(P):
+    """The reported lower bound lies below the reported energy.  A new-user trial saw
+    negative gaps of 5e-15 of the energy on this bonded P4 beam (the bound from the
+    Hermite energy, the answer's energy from the mixed form: their round-off)."""
+    data = {"beam": {"model": "gao", "supports": "P4", "length": 1.0, "E": 2.1e11,
+                     "nu": 0.3, "half_thickness": 0.1, "width": 1.0},
+            "load": {"q": -1e7, "axial": P}, "mesh": {"elements": 16},
+            "foundation": {"kind": "bilateral", "gap": 0.0, "stiffness": 1e9}}
+    res = solve(Scene.from_dict(data), "global")
+    g = res.extra["global"]
+    assert res.status == "optimal" and g["certificate"] == "dual bound"
+    assert g["bound_gap"] >= 0 and g["lower_bound"] <= res.energy

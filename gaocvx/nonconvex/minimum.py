@@ -362,8 +362,8 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
         notes.append(f"the buckling modes failed their checks ({modes.checks})")
     if not passes(residual):
         notes.append("the minimiser's own certificate failed")
-    raw = answer(mf, z, lam, residual, "global: " + "; ".join(notes), out.nodes, "clarabel-bnb",
-                 t0)
+    raw = answer(mf, z, lam, residual, "global: " + "; ".join(notes), out.nodes,
+                 "dual-bound" if out.certificate == "dual bound" else "clarabel-bnb", t0)
     if not ok:
         raw["status"] = "inaccurate"
     info = {"unstable_modes": int(k), "mode_loads": [float(x) for x in modes.loads],
