@@ -8,6 +8,7 @@ branch and bound's answer (the dual bound switched off) for the same scene.
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 from conftest import scene_dict
 from nonconvex_independent import Discrete
@@ -161,3 +162,37 @@ def test_dual_bound_lies_below_the_reported_energy(P):
     g = res.extra["global"]
     assert res.status == "optimal" and g["certificate"] == "dual bound"
     assert g["bound_gap"] >= 0 and g["lower_bound"] <= res.energy
+
+
+# ------------------------------------------------------------------ the tangent inequality
+
+@settings(max_examples=40, deadline=None)
+@given(supports=st.sampled_from(["P1", "P2", "P3", "P4"]),
+       bed=st.sampled_from([None, "bilateral", "unilateral"]),
+       gap=st.floats(0.0, 0.01), seed=st.integers(0, 2**31 - 1))
+def test_tangent_function_is_below_the_energy_with_M_as_its_quadratic_part(supports, bed, gap,
+                                                                          seed):
+    """L_t(u), written out from M(t) (tangent_matrix) as 1/2 u'M u - f'u + F(u) -
+    a/12 sum w t^2 with F the bed's energy, equals Pi(u) - a/12 sum w (y - t)^2 and so
+    lies below Pi(u), for random u and t >= 0: M is the quadratic part the certificate
+    needs, for every contact kind it takes."""
+    foundation = None if bed is None else {"kind": bed, "gap": gap, "stiffness": 3e9}
+    scene = scene_at(supports, -1e6, 2.0, elements=6, foundation=foundation)
+    dp = DiscreteProblem(scene, check_convexity=False)
+    rng = np.random.default_rng(seed)
+    u = rng.normal(size=dp.n) * 10.0 ** rng.uniform(-2, 2)
+    t = rng.uniform(0, 2, size=len(dp.wq_gao)) * float(np.mean((dp.B1 @ u) ** 2))
+    M = dual.tangent_matrix(dp, t)
+    quad = 0.5 * u @ (M @ u) - dp.f @ u - dp.a / 12.0 * float(dp.wq_gao @ t**2)
+    c = np.broadcast_to(dp.c * dp.wq_c, dp.wq_c.shape) if dp.contact == "foundation" else 0.0
+    if bed == "bilateral":      # 1/2 c (g - Nu)^2 less its quadratic part, already in M
+        w = dp.Nq @ u
+        quad += float(np.sum(c * (0.5 * dp.g**2 - dp.g * w)))
+    elif bed == "unilateral":   # not in M: the bed's own (convex) energy
+        quad += 0.5 * float(np.sum(c * np.maximum(dp.g - dp.Nq @ u, 0.0) ** 2))
+    y = (dp.B1 @ u) ** 2
+    deficit = dp.a / 12.0 * float(dp.wq_gao @ (y - t) ** 2)
+    energy = dp.energy(u)
+    size = sum(abs(v) for v in dp.energy_parts(u).values()) + abs(quad) + deficit
+    assert quad == pytest.approx(energy - deficit, abs=1e-11 * size)
+    assert quad <= energy + 1e-11 * size
