@@ -130,10 +130,9 @@ def _cmd_path(args) -> int:
         for p in path.points:
             print(f"P {p['P']:12.5g} N  w_c {p['w_c']:12.5g} m  energy {p['energy']:13.6g} J  "
                   f"{'stable  ' if p['stable'] else 'unstable'}{'  global' if p['global'] else ''}")
-    for P in path.P:
-        why = path.errors.get(P, path.failures.get(P))
-        if why is not None:
-            print(f"error: P = {P:.6g} N: {why}", file=sys.stderr)
+    for record in path.records():
+        if record.get("status") == "error":
+            print(f"error: P = {record['P']:.6g} N: {record['error']}", file=sys.stderr)
     if args.csv:
         with open(args.csv, "w", newline="") as fh:
             csv.writer(fh).writerows(path.rows())

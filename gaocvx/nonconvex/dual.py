@@ -69,6 +69,8 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..linalg import BandedCholesky, NotPositiveDefinite
+from .bnb import BnBResult
+from .polish import polish
 
 __all__ = ["DualBound", "tangent_matrix", "tangent_bound", "proved_margin", "metric_floor",
            "shortcut", "UNIQUE_RADIUS"]
@@ -174,8 +176,7 @@ def _factor_error(A, S) -> float | None:
     except NotPositiveDefinite:
         return None
     R = abs(chol.factor())
-    P = S @ (R.T @ R) @ S
-    return 2.0 * _gamma(chol.u + 1) * float(np.max(np.asarray(P.sum(axis=1)), initial=0.0))
+    return 2.0 * _gamma(chol.u + 1) * _row_norm(R.T @ R, S)
 
 
 def _row_norm(A, S) -> float:
@@ -306,8 +307,6 @@ def shortcut(dp, prog, start, lo, hi, tol: float):
         ``(result, start)``: a :class:`.bnb.BnBResult` with no nodes, or None;
         and the start for the branch and bound, the polished point where lower.
     """
-    from .bnb import BnBResult
-    from .polish import polish
     e0, u0, s0, lam0 = start
     if dp.contact == "obstacle" or not np.any(s0):
         return None, start
