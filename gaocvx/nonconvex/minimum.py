@@ -263,7 +263,8 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     scale = max(sum(abs(v) for v in dp.energy_parts(start[1]).values()), floor, 1e-300)
     # The dual bound first (no obstacle): where it holds, no branch and bound is needed.
     # (taken within a tenth of GAP_TOL: its gap is the round-off of the residual,
-    # measured 1e-16 to 6e-12 of the scale at 8-1024 elements, 1.4e-10 at 4096)
+    # with the energy's round-off allowed for: 6e-14 to 1.4e-12 of the scale at 16-512
+    # elements, benchmarks/nonconvex.py dual)
     leaves = None if prior is None else prior[0]
     out, start = (None, start) if leaves is not None else dual.shortcut(
         dp, prog, start, lo, hi, 0.1 * GAP_TOL * scale)
