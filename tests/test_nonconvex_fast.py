@@ -214,6 +214,36 @@ def test_box_qp_is_exact_against_a_grid():
         assert np.all(np.abs(d) <= 1) and g @ d + 0.5 * d @ H @ d <= values.min() + 1e-12
 
 
+def test_box_qp_meets_its_optimality_conditions_up_to_seven_modes():
+    """The active-set box QP: feasible, and its KKT conditions hold (a bound's
+    multiplier has the right sign, the gradient vanishes on free coordinates);
+    its value is that of trying every face."""
+    from gaocvx.nonconvex.fast import _box_qp_faces, box_qp
+
+    rng = np.random.default_rng(7)
+    for k in range(1, 8):
+        for trial in range(60):
+            M = rng.normal(size=(k, k))
+            H = M @ M.T + 10.0 ** rng.uniform(-6, 1) * np.eye(k)
+            g = rng.normal(size=k) * 10.0 ** rng.uniform(-3, 3)
+            a, b = -10.0 ** rng.uniform(-3, 1, size=k), 10.0 ** rng.uniform(-3, 1, size=k)
+            if trial % 3 == 0:
+                a[: k // 2 + 1] = 0.0   # the current point on a face of its box
+            d = box_qp(H, g, a, b)
+            grad = g + H @ d
+            size = np.abs(g).max() + np.abs(H).max() * np.abs(d).max()
+            assert np.all(d >= a) and np.all(d <= b)
+            at_lo, at_hi = d <= a, d >= b
+            free = ~(at_lo | at_hi)
+            assert np.all(np.abs(grad[free]) <= 1e-9 * size)
+            assert np.all(grad[at_lo & ~at_hi] >= -1e-9 * size)
+            assert np.all(grad[at_hi & ~at_lo] <= 1e-9 * size)
+            if k <= 5:
+                e = _box_qp_faces(H, g, a, b)
+                value = g @ d + 0.5 * d @ H @ d
+                assert value <= g @ e + 0.5 * e @ H @ e + 1e-12 * (abs(value) + size * np.abs(d).max())
+
+
 @pytest.mark.parametrize("kw", [dict(supports="P1", q=-5e7, axial=1.1e10),
                                 pytest.param(dict(supports="P1", q=0.0, axial=1.1e10),
                                              marks=pytest.mark.slow)])

@@ -223,15 +223,61 @@ class FastProgram:
 def box_qp(H, g, a, b) -> np.ndarray:
     """The minimiser of ``g'd + d'H d / 2`` over the box ``a <= d <= b`` (H positive definite, small k).
 
-    Every face of the box (each coordinate free, at its lower or at its upper
-    end: 3^k faces) is tried: the minimiser is the unconstrained minimiser of
-    the face that contains it in its relative interior, so the best feasible
-    face solution is exact.
+    A primal active-set method (Nocedal and Wright, algorithm 16.3) from
+    ``d = 0`` (``a <= 0 <= b``: the box is around the current point): on the
+    free coordinates the face's minimiser, a step to it as far as the box
+    allows (the blocking bound joins the working set), and a bound whose
+    multiplier has the wrong sign leaves it.  For a strictly convex QP it
+    ends, exactly, at the face whose unconstrained minimiser it is, in a few
+    iterations; the 3^k faces were once all solved (243 at k = 5: 20 ms a
+    call, three quarters of a five-mode search's time).  Should it not end
+    within its iterations (cycling on a degenerate face), every face is tried
+    (:func:`_box_qp_faces`).
 
     Examples
     --------
     >>> box_qp(np.eye(2), np.array([-2.0, 1.0]), np.array([-1.0, -1.0]), np.array([1.0, 1.0]))
     array([ 1., -1.])
+    """
+    g, a, b = np.asarray(g, float), np.asarray(a, float), np.asarray(b, float)
+    k = len(g)
+    d = np.clip(np.zeros(k), a, b)
+    # Working set: 0 free, -1 at the lower bound, +1 at the upper.
+    side = np.zeros(k, int)
+    for _ in range(8 * k + 8):
+        free = side == 0
+        step = np.zeros(k)
+        if free.any():
+            try:
+                step[free] = np.linalg.solve(H[np.ix_(free, free)], -(g + H @ d)[free])
+            except np.linalg.LinAlgError:
+                break
+        # The longest step within the box, and the bound that blocks it.
+        with np.errstate(divide="ignore", invalid="ignore"):
+            room = np.where(step < 0, (a - d) / step, np.where(step > 0, (b - d) / step, np.inf))
+        room = np.where(free, np.maximum(room, 0.0), np.inf)
+        j = int(np.argmin(room))
+        if room[j] < 1.0:
+            d = np.clip(d + room[j] * step, a, b)
+            side[j] = -1 if step[j] < 0 else 1
+            d[j] = a[j] if step[j] < 0 else b[j]
+            continue
+        # The face's minimiser: a bound whose multiplier pulls into the box leaves.
+        d = np.clip(d + step, a, b)
+        grad = g + H @ d
+        wrong = np.where(side == -1, -grad, np.where(side == 1, grad, 0.0))
+        j = int(np.argmax(wrong))
+        if wrong[j] <= 0.0:
+            return d
+        side[j] = 0
+    return _box_qp_faces(H, g, a, b)
+
+
+def _box_qp_faces(H, g, a, b) -> np.ndarray:
+    """:func:`box_qp` by trying every face of the box (3^k of them).
+
+    The minimiser is the unconstrained minimiser of the face that contains it
+    in its relative interior, so the best feasible face solution is exact.
     """
     k = len(g)
     best, best_val = np.clip(np.zeros(k), a, b), math.inf
