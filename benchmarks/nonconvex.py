@@ -104,16 +104,14 @@ def table(out, cases=CASES, sizes=(8, 16, 32, 64, 128), fast=False):
 
 def dual_table(out, cases, sizes):
     """The global method with and without the dual bound's shortcut (same scenes, one run)."""
-    import gaocvx.nonconvex.dual as dual
+    import gaocvx.nonconvex.minimum as minimum
 
     def run(s, shortcut):
-        saved = dual.shortcut
-        if not shortcut:
-            dual.shortcut = lambda dp, prog, start, lo, hi, tol: (None, start)
+        minimum.DUAL_BOUND = shortcut
         try:
             return _global(s, None)
         finally:
-            dual.shortcut = saved
+            minimum.DUAL_BOUND = True
 
     lines = ["| scene | N | k | certificate | time [s] | branch and bound alone [s] | ratio | "
              "gap / scale | its gap / scale | \\|ΔE\\| / scale | status |",

@@ -90,6 +90,10 @@ DENSE_OBSTACLE_ELEMENTS = 32
 # elements (measured at 8192 elements on a loaded machine: 2 to 10 s a node, and
 # every scene stopped at 120 s with 13 to 31 of its 40 to 60 nodes).
 TIME_ELEMENTS = 2048
+# Whether the dual bound is tried before the branch and bound (step 5 of the
+# module's notes); False: the branch and bound alone (tests and benchmarks
+# compare the two).
+DUAL_BOUND = True
 # Two minimisers are distinct when their deflections differ by more than this,
 # relative to the larger one's G-norm (sqrt ∫ (w')^2).
 DISTINCT = 1e-6
@@ -266,7 +270,7 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     # with the energy's round-off allowed for: 6e-14 to 1.4e-12 of the scale at 16-512
     # elements, benchmarks/nonconvex.py dual)
     leaves = None if prior is None else prior[0]
-    out, start = (None, start) if leaves is not None else dual.shortcut(
+    out, start = (None, start) if leaves is not None or not DUAL_BOUND else dual.shortcut(
         dp, prog, start, lo, hi, 0.1 * GAP_TOL * scale)
     if out is None:
         out = branch_and_bound(prog, feasible_energy(dp, prog), lo, hi, GAP_TARGET * scale,
