@@ -425,11 +425,16 @@ def _contact_step(mf: MixedForm, z, lam, H, rhs_z, rhs_c) -> np.ndarray:
     # genuine contact; interior-point gaps there are ~tol / force), and any
     # point the step moves into the obstacle by more than it.
     allowance = 1e-3 * STATIONARITY_TOL * mf.deflection_size(z)
-    held = gap <= allowance
+    on = gap <= allowance
+    held = on.copy()
     for _ in range(CONTACT_ROUNDS):
-        released = np.where(held, 0.0, lam)
+        # A free point's multiplier leaves the residual.  A point let down onto the
+        # obstacle by an earlier round aims at it (its penalty rho (gap + A d)^2 / 2),
+        # not at its present place; one on it already stays (its gap, within the
+        # allowance, is the answer's feasibility, which the certificate measures).
+        pull = np.where(held, np.where(on, 0.0, -rho * gap), -lam)
         Hc = mf.hessian(z, rho=rho, active=(bed, held))
-        d, _ = mf.kkt_factor(Hc).solve(rhs_z - mf.AT @ released, rhs_c)
+        d, _ = mf.kkt_factor(Hc).solve(rhs_z + mf.AT @ pull, rhs_c)
         into = ~held & (gap + mf.A @ d < -allowance)
         if not into.any():
             return d
