@@ -224,8 +224,29 @@ def rescaled_leaves(leaves, ratio: float) -> list:
 
 
 def components(leaves) -> list:
-    """Groups of leaves whose boxes touch (connected components)."""
+    """Groups of leaves whose boxes touch (connected components).
+
+    The boxes are sorted by their lower end along one amplitude, so each is
+    compared only with those that begin before it ends there (a sweep); the
+    comparison of all pairs, in Python, took most of a six-mode search (near
+    the minimum some 10^4 leaves: 5 10^7 pairs).
+
+    Examples
+    --------
+    >>> box = lambda lo, hi: Leaf(0.0, np.array(lo, float), np.array(hi, float), None, None, True)
+    >>> groups = components([box([0, 0], [1, 1]), box([3, 0], [4, 1]), box([1, 1], [2, 2])])
+    >>> sorted(len(g) for g in groups)
+    [1, 2]
+    """
     n = len(leaves)
+    if n == 0:
+        return []
+    lo = np.array([leaf.lo for leaf in leaves], float)
+    hi = np.array([leaf.hi for leaf in leaves], float)
+    eps = 1e-12 * (1.0 + float(np.max(np.abs(hi))))
+    axis = int(np.argmax(np.max(hi, axis=0) - np.min(lo, axis=0)))
+    order = np.argsort(lo[:, axis], kind="stable")
+    lo, hi = lo[order], hi[order]
     parent = list(range(n))
 
     def find(i):
@@ -235,12 +256,15 @@ def components(leaves) -> list:
         return i
 
     for i in range(n):
-        for j in range(i + 1, n):
-            a, b = leaves[i], leaves[j]
-            eps = 1e-12 * (1.0 + np.max(np.abs(np.r_[a.hi, b.hi])))
-            if np.all(a.lo <= b.hi + eps) and np.all(b.lo <= a.hi + eps):
-                parent[find(i)] = find(j)
+        # Boxes after i in the sweep that begin before i ends along the axis.
+        end = int(np.searchsorted(lo[:, axis], hi[i, axis] + eps, side="right"))
+        if end <= i + 1:
+            continue
+        touch = np.all(lo[i + 1:end] <= hi[i] + eps, axis=1) & \
+            np.all(lo[i] <= hi[i + 1:end] + eps, axis=1)
+        for j in (i + 1 + np.flatnonzero(touch)).tolist():
+            parent[find(i)] = find(j)
     groups = {}
     for i in range(n):
-        groups.setdefault(find(i), []).append(leaves[i])
+        groups.setdefault(find(i), []).append(leaves[order[i]])
     return list(groups.values())

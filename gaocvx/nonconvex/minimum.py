@@ -285,7 +285,9 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     near = [leaf for leaf in out.leaves if leaf.lower <= best_e + tol and leaf.s is not None]
     alternatives = []
     norm = lambda x: math.sqrt(max(float(x @ (dp.G @ x)), 0.0))  # noqa: E731
-    for group in components(near)[:16]:
+    # (the groups with the lowest bounds first: at most 16 are searched)
+    groups = sorted(components(near), key=lambda group: min(leaf.lower for leaf in group))
+    for group in groups[:16]:
         glo = np.min([leaf.lo for leaf in group], axis=0)
         ghi = np.max([leaf.hi for leaf in group], axis=0)
         if np.all(glo <= best_s) and np.all(best_s <= ghi):
