@@ -44,6 +44,8 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 
 __all__ = ["Leaf", "BnBResult", "branch_and_bound", "components", "rescaled_leaves"]
 
@@ -247,14 +249,7 @@ def components(leaves) -> list:
     axis = int(np.argmax(np.max(hi, axis=0) - np.min(lo, axis=0)))
     order = np.argsort(lo[:, axis], kind="stable")
     lo, hi = lo[order], hi[order]
-    parent = list(range(n))
-
-    def find(i):
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
+    rows, cols = [], []
     for i in range(n):
         # Boxes after i in the sweep that begin before i ends along the axis.
         end = int(np.searchsorted(lo[:, axis], hi[i, axis] + eps, side="right"))
@@ -262,9 +257,13 @@ def components(leaves) -> list:
             continue
         touch = np.all(lo[i + 1:end] <= hi[i] + eps, axis=1) & \
             np.all(lo[i] <= hi[i + 1:end] + eps, axis=1)
-        for j in (i + 1 + np.flatnonzero(touch)).tolist():
-            parent[find(i)] = find(j)
+        j = i + 1 + np.flatnonzero(touch)
+        rows.append(np.full(len(j), i))
+        cols.append(j)
+    edges = (np.concatenate(rows), np.concatenate(cols)) if rows else ([], [])
+    graph = sp.coo_matrix((np.ones(len(edges[0])), edges), shape=(n, n))
+    _, label = connected_components(graph, directed=False)
     groups = {}
     for i in range(n):
-        groups.setdefault(find(i), []).append(leaves[order[i]])
+        groups.setdefault(int(label[i]), []).append(leaves[order[i]])
     return list(groups.values())
