@@ -68,7 +68,7 @@ TOL_E = 1e-8
 TOL_KKT = 1e-6
 TOL_HESS = 1e-8
 SLOW = 60.0
-MAX_MODES = 5        # documented in docs/nonconvex.md (global method)
+MAX_MODES = 6        # documented in docs/nonconvex.md (global method)
 MAX_ELEMENTS = 8192  # documented: the fast path (the dense node programs stop at 128)
 THESIS_BEAM = {"length": 1.0, "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1, "width": 1.0}
 

@@ -226,13 +226,13 @@ def test_four_unstable_modes_certified_and_no_local_search_finds_anything_below(
     assert abs(sum(phys.values()) - r.energy) <= 1e-9 * scale
 
 
-def test_more_than_five_unstable_modes_are_refused_with_the_count():
+def test_more_than_six_unstable_modes_are_refused_with_the_count():
     probe = Scene.from_dict(scene_dict("P4", q=-1e7, elements=8))
     scene = Scene.from_dict(scene_dict("P4", q=-1e7, elements=8,
-                                       axial=40.0 * first_mode_load(BeamProblem(probe))))
+                                       axial=56.0 * first_mode_load(BeamProblem(probe))))
     k = _unstable_count(scene)
-    assert k == 6      # lambda_n ~ n^2 lambda_1: 36 < 40 < 49
-    with pytest.raises(SceneError, match=f"with {k} unstable buckling modes.*at most 5"):
+    assert k == 7      # lambda_n ~ n^2 lambda_1: 49 < 56 < 64
+    with pytest.raises(SceneError, match=f"with {k} unstable buckling modes.*at most 6"):
         solve(scene, "global")
 
 

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from conftest import scene_dict
-from nonconvex_campaign_support import random_scene
+from nonconvex_campaign_support import MAX_MODES, random_scene
 from nonconvex_independent import Discrete
 from shor import admissible, relax
 
@@ -127,16 +127,17 @@ def test_without_load_the_relaxation_averages_the_mirror_minimisers(supports, ax
 def test_random_small_scenes():
     """Seeded scenes above P_bar_h on 4-8 elements: the bound always, the minimiser where tight.
 
-    A refusal must be one the documentation names (more than 5 unstable modes, or
-    no quartic term).  Scenes with four or five modes (bonded beds far above the
-    limit) are left to tests/test_nonconvex.py: their branch and bound takes minutes.
+    A refusal must be one the documentation names (more than MAX_MODES unstable
+    modes, or no quartic term).  Scenes with four to MAX_MODES modes (bonded beds
+    far above the limit) are left to tests/test_nonconvex.py: their branch and
+    bound takes minutes.
     """
     tight = done = 0
     for i in range(12):
         rng = np.random.default_rng([10, i])
         case = random_scene(rng, elements=int(rng.choice([4, 6, 8])))
         k = Discrete(case.scene, 1.0).unstable_modes()
-        if case.data["beam"]["model"] == "gao" and 3 < k <= 5:
+        if case.data["beam"]["model"] == "gao" and 3 < k <= MAX_MODES:
             continue
         try:
             t, *_ = check(case.scene)

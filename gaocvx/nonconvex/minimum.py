@@ -71,8 +71,9 @@ GAP_TARGET = 1e-11
 # Unstable modes the branch and bound takes, and its node programs at most with up
 # to three of them (node_limit: four times more per further mode).  Measured on
 # 32-64 elements: one mode ~50 nodes, two ~500, four 2700-4000 (P1 at 8 P_bar_h),
-# five 7800-12400 (P1 at 12, P4 at 26 P_bar_h).
-MAX_MODES = 5
+# five 7800-12400 (P1 at 12, P4 at 26 P_bar_h); six 17600 (P4 on a bonded bed,
+# 8 elements, 265 s with the fast path's active-set box QP).
+MAX_MODES = 6
 MAX_NODES = 4000
 # The energy scale's floor, as a fraction of the scene's own energy (see
 # scene_energy): an answer whose energy is far below it (a beam pressed flat onto
@@ -187,8 +188,8 @@ def solve_global(dp, modes=None, max_nodes: int | None = None,
         Node programs at most (by default :func:`node_limit` of k).
     fast : bool, optional
         Node problems through the banded Newton machinery (:mod:`.fast`); by
-        default wherever it serves (:func:`fast_eligible`) for one, two, four
-        and five unstable modes, and for three beyond MAX_ELEMENTS
+        default wherever it serves (:func:`fast_eligible`) for one, two and
+        four to six unstable modes, and for three beyond MAX_ELEMENTS
         (:func:`fast_by_default`).
 
     Returns

@@ -51,7 +51,7 @@ from .modecheck import (accurate_ritz, count_below, inverse_iteration, margin_of
 __all__ = ["Modes", "unstable_modes", "MARGIN", "MAX_DENSE_DOFS", "MAX_UNSTABLE"]
 
 # More unstable modes than this are not resolved further (the global method takes
-# five, minimum.MAX_MODES; equilibria two): the count only has to show that there
+# six, minimum.MAX_MODES; equilibria two): the count only has to show that there
 # are too many.
 MAX_UNSTABLE = 8
 
@@ -186,7 +186,7 @@ def unstable_modes(dp, min_k: int = 0, solver: str | None = None) -> Modes:
         k = max(k, min(min_k, len(vals) - 1))
         # Stop when a stable mode was found, the solver gave all it can (the sparse
         # one at most n - 2), or there are more unstable modes than anything takes
-        # (the callers refuse beyond five): doubling on never ended on fine meshes.
+        # (the callers refuse beyond six): doubling on never ended on fine meshes.
         if k < len(vals) or len(vals) < count + 1 or k > MAX_UNSTABLE:
             break
         count *= 2
