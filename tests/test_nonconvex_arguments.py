@@ -220,7 +220,10 @@ def test_cli_path_with_skipped_forces_prints_the_rest_and_exits_2(eb_file, capsy
     out, err = capsys.readouterr()
     assert code == 2
     assert out.splitlines()[0].startswith("# 2 equilibria at 4 axial forces (2 skipped); ")
-    assert len(out.splitlines()) == 3
+    lines = out.splitlines()
+    assert len(lines) == 1 + 4   # a row per force, the skipped ones say why
+    assert [line.split()[1] for line in lines[1:]] == ["0", "15000", "30000", "45000"]
+    assert ["skipped: load.axial: " in line for line in lines[1:]] == [False, False, True, True]
     errors = err.splitlines()
     assert len(errors) == 2 and all("there is no minimiser" in e for e in errors)
     assert errors[0].startswith("error: P = 30000 N: load.axial: ")

@@ -94,7 +94,9 @@ def test_cli_path_reports_a_solver_failure_and_exits_1(p4_file, capsys, monkeypa
     assert code == 1
     lines = out.splitlines()
     assert lines[0].startswith("# 4 equilibria at 3 axial forces (1 failed); ")
-    assert len(lines) == 1 + 1 + 3
+    assert len(lines) == 1 + 1 + 1 + 3   # the failed force has its row, in force order
+    assert lines[2].startswith("P        1e+09 N  failed: equilibria: the reduced function's")
+    assert "w_c" in lines[1] and "w_c" in lines[3]
     assert err.startswith("error: P = 1e+09 N: equilibria: the reduced function's solve failed")
 
 

@@ -65,6 +65,29 @@ def test_compare(tmp_path, scene_file, capsys):
     assert (tmp_path / "c.png").exists()
 
 
+def test_compare_above_the_euler_bernoulli_limit_gives_gao_and_the_refusal(tmp_path, capsys):
+    """Between the two limits both models solve (Gao by the global method); above the
+    Euler-Bernoulli one (pi^2 EI / L^2 = 1.382e9 N here, no quartic term) that model has
+    no minimiser: the Gao answer is still given, the refusal in its place, exit 2."""
+    scene = tmp_path / "s.toml"
+    scene.write_text('[beam]\nmodel = "gao"\nsupports = "P4"\nlength = 1.0\nE = 2.1e11\n'
+                     'nu = 0.3\nhalf_thickness = 0.1\nwidth = 1.0\n[load]\nq = -1e7\n'
+                     'axial = 3e9\n[mesh]\nelements = 16\n')
+    assert main(["compare", str(scene), "--json", "--plot", str(tmp_path / "c.png")]) == 2
+    out, err = capsys.readouterr()
+    data = json.loads(out)
+    assert data["euler-bernoulli"]["status"] == "error"
+    assert "there is no minimiser" in data["euler-bernoulli"]["error"]
+    assert data["gao"]["status"] == "optimal" and data["gao"]["method"] == "global"
+    assert data["comparison"] == {"min_w_ratio": None, "energy_ratio": None}
+    assert err.startswith("error: euler-bernoulli: load.axial: ") and err.count("\n") == 1
+    assert (tmp_path / "c.png").exists()
+    # The Gao answer is the one `solve` gives for the scene.
+    assert main(["solve", str(scene), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["energy"] == pytest.approx(data["gao"]["energy"],
+                                                                          rel=1e-12)
+
+
 def test_sweep_penetration_falls_as_stiffness_rises(tmp_path, scene_file, capsys):
     csv_path = tmp_path / "s.csv"
     code = main(["sweep", str(scene_file), "--vary", "foundation.stiffness=1e8:1e13:8:log",

@@ -127,7 +127,11 @@ def _cmd_path(args) -> int:
         print(f"# {_count(len(path.points), 'equilibrium', 'equilibria')} at "
               f"{_count(len(path.P), 'axial force', 'axial forces')}{skipped}; "
               f"w_c = w({path.x_c:.4g} m)")
-        for p in path.points:
+        for p in path.records():   # in force order, a skipped or failed force in its place
+            if p.get("status") == "error":
+                kind = "skipped" if p["P"] in path.errors else "failed"
+                print(f"P {p['P']:12.5g} N  {kind}: {p['error']}")
+                continue
             print(f"P {p['P']:12.5g} N  w_c {p['w_c']:12.5g} m  energy {p['energy']:13.6g} J  "
                   f"{'stable  ' if p['stable'] else 'unstable'}{'  global' if p['global'] else ''}")
     for record in path.records():
