@@ -156,9 +156,12 @@ def fast_by_default(dp, k: int) -> bool:
     """Whether :func:`solve_global` takes the fast path unless told.
 
     Wherever it serves: faster than the dense programs for one or two modes
-    (measured at 16-32 elements: 2-10 times), slower for three (45 s against
-    23 s at 16 elements), so those use it only beyond the dense programs; for
-    four and five again wherever it serves (P1 at 8 P_bar_h, k = 4: 48 s against
+    (measured at 16-32 elements: 2-10 times); for three since each projected
+    Newton step's box QP is solved by an active set (P1 at 5 P_bar_h: 11 s
+    against 20 s at 16 elements, 15 s against 93 s at 64; at 100 the dense
+    programs stopped at their 120 s with a gap of 2e-4 of the scale, the fast
+    path certified in 40 s; before the active set it took 45 s against 23 s at
+    16 elements); for four and five (P1 at 8 P_bar_h, k = 4: 48 s against
     48 s at 16 elements, 56 s against 335 s at 64; at k = 5 the dense programs'
     bounds stalled at Clarabel's accuracy, 1.7e-7 of the energy scale, P1 at
     12 P_bar_h on 32 elements, where the fast path certified 1e-11).  With
@@ -171,7 +174,7 @@ def fast_by_default(dp, k: int) -> bool:
     n_el = dp.n_nodes - 1
     if dp.contact == "obstacle":
         return fast_eligible(dp, k) and n_el > DENSE_OBSTACLE_ELEMENTS
-    return fast_eligible(dp, k) and (k != 3 or n_el > MAX_ELEMENTS)
+    return fast_eligible(dp, k)
 
 
 def solve_global(dp, modes=None, max_nodes: int | None = None,
@@ -188,9 +191,9 @@ def solve_global(dp, modes=None, max_nodes: int | None = None,
         Node programs at most (by default :func:`node_limit` of k).
     fast : bool, optional
         Node problems through the banded Newton machinery (:mod:`.fast`); by
-        default wherever it serves (:func:`fast_eligible`) for one, two and
-        four to six unstable modes, and for three beyond MAX_ELEMENTS
-        (:func:`fast_by_default`).
+        default wherever it serves (:func:`fast_eligible`: one to six unstable
+        modes; with an obstacle beyond DENSE_OBSTACLE_ELEMENTS), see
+        :func:`fast_by_default`.
 
     Returns
     -------
