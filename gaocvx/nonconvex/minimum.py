@@ -281,7 +281,8 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
         dp, prog, start, lo, hi, 0.1 * GAP_TOL * scale)
     if out is None:
         out = branch_and_bound(prog, feasible_energy(dp, prog), lo, hi, GAP_TARGET * scale,
-                               max_nodes, start, leaves=leaves, time_limit=time_limit(dp, k))
+                               max_nodes, start, leaves=leaves, time_limit=time_limit(dp, k),
+                               accept=0.5 * GAP_TOL * scale)
     if out.s is None:
         out.s = start[2]
     best_s, best_u, lam = polish(dp, prog, out.s, out.u, out.lam, lo, hi)

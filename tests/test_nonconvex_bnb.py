@@ -1,0 +1,67 @@
+"""The branch and bound's closing rules, on a one-dimensional toy with exact node bounds.
+
+F(s) = s^4 - s^2 on [-2, 2] (c = 1: the concave part -s^2, replaced on a box by its
+chord); its minimum is -1/4 at s = +-1/sqrt 2 (the reference: calculus).
+"""
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+
+from gaocvx.nonconvex.bnb import branch_and_bound
+
+
+class Toy:
+    """Exact node programs ``min s^4 + chord`` on a grid, except that the first solve of
+    the box ``stalled`` returns a loose bound and a value far above it (a node program
+    that stopped short: its bound valid, 5 below the box's true minimum)."""
+
+    modes = SimpleNamespace(c=np.array([1.0]))
+
+    def __init__(self, stalled=None):
+        self.stalled = stalled
+
+    def solve_box(self, lo, hi):
+        grid = np.linspace(lo[0], hi[0], 4001)
+        val = grid**4 - (lo[0] + hi[0]) * grid + lo[0] * hi[0]
+        i = int(np.argmin(val))
+        lower = float(val[i]) - 1e-9
+        if self.stalled is not None and (lo[0], hi[0]) == self.stalled:
+            self.stalled = None
+            return SimpleNamespace(lower=lower - 5.0, value=lower + 5.0, s=lo.copy(),
+                                   u=lo.copy(), lam=None, ok=True)
+        return SimpleNamespace(lower=lower, value=float(val[i]), s=grid[i:i + 1],
+                               u=grid[i:i + 1], lam=None, ok=True)
+
+
+def energy(u):
+    return float(u[0] ** 4 - u[0] ** 2)
+
+
+def test_exact_nodes_certify_the_minimum():
+    out = branch_and_bound(Toy(), energy, [-2.0], [2.0], tol=1e-6)
+    assert out.converged and 0.0 <= out.gap <= 1e-6
+    assert abs(out.upper + 0.25) <= 1e-6
+    assert abs(abs(out.s[0]) - 1 / math.sqrt(2)) <= 1e-3
+
+
+def test_a_node_that_stopped_short_is_split_not_closed():
+    """The box [-2, 0] first gets a bound 5 below its minimum and a value 5 above it:
+    its "accuracy" 10 exceeds ten times its chord error (1), which closed it, and the
+    gap stayed 3.75 (the root's bound).  Split, its children are solved afresh and the gap closes."""
+    out = branch_and_bound(Toy(stalled=(-2.0, 0.0)), energy, [-2.0], [2.0], tol=1e-6)
+    assert 0.0 <= out.gap <= 1e-6, out.gap
+    assert abs(out.upper + 0.25) <= 1e-6
+
+
+def test_a_box_at_its_programs_accuracy_closes_within_accept_and_the_gap_says_so():
+    """With ``accept`` 10 the caller certifies gaps up to 10: the noisy box is closed
+    (what is left of its gap is its program's accuracy), and the reported gap is what
+    the leaves prove: the root's bound -4 (min s^4 - 4 on [-2, 2]) holds in the box,
+    above its own -6.19, so 3.75: honest, not hidden."""
+    out = branch_and_bound(Toy(stalled=(-2.0, 0.0)), energy, [-2.0], [2.0], tol=1e-6,
+                           accept=10.0)
+    true_min = -0.25
+    assert out.lower <= true_min <= out.upper + 1e-12
+    assert abs(out.gap - 3.75) <= 1e-6
