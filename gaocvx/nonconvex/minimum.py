@@ -169,11 +169,17 @@ def fast_by_default(dp, k: int) -> bool:
     truth, take 2.7 s a node at 128 elements (a channel took over 600 s,
     campaign scene 11:11), and on the seed-1 campaign at 8-32 elements with the
     fast path forced for every obstacle nothing was wrong (0 violations, 62
-    optimal, median 0.4 s).
+    optimal, median 0.4 s).  With an obstacle and four modes or more at every
+    mesh: the dense programs' bounds stall there too (k = 5, P4 on 10
+    elements: 480 s, gap 5e-2 of the scale, `inaccurate`; fast 33 s, certified)
+    and their nodes cost more (the six-mode obstacles and channels of the seed-61
+    and seed-62 campaigns, 8-12 elements: 544-1102 s and one `inaccurate` at its
+    960 s, against 103-241 s fast, every one certified; one five-mode channel
+    took 67 s fast against 38 s dense).
     """
     n_el = dp.n_nodes - 1
     if dp.contact == "obstacle":
-        return fast_eligible(dp, k) and n_el > DENSE_OBSTACLE_ELEMENTS
+        return fast_eligible(dp, k) and (n_el > DENSE_OBSTACLE_ELEMENTS or k >= 4)
     return fast_eligible(dp, k)
 
 
@@ -192,8 +198,8 @@ def solve_global(dp, modes=None, max_nodes: int | None = None,
     fast : bool, optional
         Node problems through the banded Newton machinery (:mod:`.fast`); by
         default wherever it serves (:func:`fast_eligible`: one to six unstable
-        modes; with an obstacle beyond DENSE_OBSTACLE_ELEMENTS), see
-        :func:`fast_by_default`.
+        modes; with an obstacle beyond DENSE_OBSTACLE_ELEMENTS or from four
+        modes on), see :func:`fast_by_default`.
 
     Returns
     -------
