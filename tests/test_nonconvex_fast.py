@@ -289,3 +289,39 @@ def test_sparse_modes_stop_when_every_computed_mode_is_unstable():
                          check_convexity=False)
     assert unstable_modes(dp).k == dp.n                       # dense: every mode unstable
     assert unstable_modes(dp, solver="sparse").k > 3          # enough to refuse; it returns
+
+
+def test_a_node_started_at_a_box_corner_reaches_its_minimum():
+    """P1 at 3 P_bar_h on a unilateral bed, 256 elements (k = 2), the box
+    [-1.92, 0] x [0, 1.92] of non-dimensional amplitudes: the full projected Newton
+    step from the corner (-1.92, 1.92) has a slice solve that fails, and the node
+    ended there, its value 51.8 against its bound -763.6 (a valid bound, 6.5 times
+    looser than it could be).  The failed trial is now a step too long.  Started
+    anywhere, the node program (a convex minimisation) reaches one minimum, each
+    bound below every start's value, and its value within 1e-5 of its bound."""
+    from gaocvx.nonconvex.fast import FastProgram
+    from gaocvx.nonconvex.minimum import rescale_for
+    from gaocvx.nonconvex.modes import unstable_modes
+
+    data = {"beam": {"model": "gao", "supports": "P1", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                     "half_thickness": 0.1, "width": 1.0},
+            "load": {"q": -1e7}, "mesh": {"elements": 256},
+            "foundation": {"kind": "unilateral", "gap": 0.005, "stiffness": 1e10}}
+    data["load"]["axial"] = 3.0 * DiscreteProblem(Scene.from_dict(data),
+                                                  check_convexity=False).P_bar_h
+    dp = DiscreteProblem(Scene.from_dict(data), check_convexity=False)
+    modes = unstable_modes(dp)
+    assert modes.k == 2
+    prog = FastProgram(rescale_for(dp, modes), modes)
+    lo, hi = np.array([-1.92382523, 0.0]), np.array([0.0, 1.92382523])
+    sols = []
+    for start in ([-1.92382523, 1.92382523], [0.0, 0.0], [-1.92382523, 0.0], [0.0, 1.92382523]):
+        prog._s = np.array(start)   # the warm start the next node takes
+        sols.append(prog.solve_box(lo, hi))
+    values = np.array([s.value for s in sols])
+    assert np.ptp(values) <= 1e-8 * np.max(np.abs(values)), values
+    # (to the values' round-off: they differ by 1e-11 of themselves, energies whose
+    # parts cancel; the branch and bound aims at 1e-11 of the parts' sum)
+    assert max(s.lower for s in sols) <= np.min(values) + 1e-10 * np.max(np.abs(values))
+    assert all(s.value - s.lower <= 1e-5 * abs(s.value) for s in sols), \
+        [(s.value, s.lower) for s in sols]

@@ -203,7 +203,10 @@ class FastProgram:
             while True:
                 trial = np.clip(s + t * d, lo, hi)
                 tv, tg, th, tu, tok = G(trial)
-                if tv <= value + 1e-4 * t * slope_d or t < 1e-8:
+                # (a slice solve that failed is a step too long, not the node's end:
+                # a full step from a box corner once failed where half of it did not,
+                # and the node stopped at the corner 815 above its bound)
+                if (tok and tv <= value + 1e-4 * t * slope_d) or t < 1e-8:
                     break
                 t *= 0.5
             if not tok or not tv <= value:
