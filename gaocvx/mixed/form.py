@@ -245,7 +245,7 @@ class MixedForm:
         # Iterative refinement only where the matrix is ill-conditioned: with the
         # obstacle's penalty.
         refine = 1 if H.obstacle is not None else 0
-        return KKTFactor(H.band(), s.lo, s.up, s.order, s.n, H, self.C, refine)
+        return KKTFactor(H.band(), s.lo, s.up, s.order, s.n, H, self.C, refine, s.CT)
 
     def kkt_solve(self, H: Hessian, rhs_z, rhs_c) -> tuple[np.ndarray, np.ndarray]:
         """Solve ``[[H, C'], [C, 0]] [d; mu] = [rhs_z; rhs_c]`` as a banded system."""

@@ -29,12 +29,14 @@ class Hessian:
     def __matmul__(self, x):
         mf = self.mf
         y = mf.H0 @ x
+        # (x may be a matrix, one column per vector: the weights then scale its rows)
+        col = (lambda w: w) if np.ndim(x) == 1 else (lambda w: w[:, None])
         if self.gao is not None:
-            y += mf.B1T @ (self.gao * (mf.B1 @ x))
+            y += mf.B1T @ (col(self.gao) * (mf.B1 @ x))
         if self.foundation is not None:
-            y += mf.NqT @ (self.foundation * (mf.Nq @ x))
+            y += mf.NqT @ (col(self.foundation) * (mf.Nq @ x))
         if self.obstacle is not None:
-            y += mf.AT @ (self.obstacle * (mf.A @ x))
+            y += mf.AT @ (col(self.obstacle) * (mf.A @ x))
         return y
 
     def band(self) -> np.ndarray:
@@ -56,22 +58,27 @@ class Hessian:
 class KKTFactor:
     """LU factor (LAPACK gbtrf) of a banded KKT matrix, for repeated solves."""
 
-    def __init__(self, ab, lo, up, order, n, H=None, C=None, refine=0):
+    def __init__(self, ab, lo, up, order, n, H=None, C=None, refine=0, CT=None):
         self.lu, self.piv, info = sla.lapack.dgbtrf(ab, lo, up)
         if info > 0:
             raise np.linalg.LinAlgError("singular KKT matrix")
         self.lo, self.up, self.order, self.n = lo, up, order, n
         self.H, self.C, self.refine = H, C, refine
+        self.CT = CT if CT is not None or C is None else C.T.tocsr()
 
     def _solve(self, rhs_z, rhs_c):
         b = np.concatenate([rhs_z, rhs_c])[self.order]
         x, info = sla.lapack.dgbtrs(self.lu, self.lo, self.up, b, self.piv)
-        sol = np.empty(len(self.order))
+        sol = np.empty_like(x)
         sol[self.order] = x
         return sol[: self.n], sol[self.n:]
 
     def solve(self, rhs_z, rhs_c) -> tuple[np.ndarray, np.ndarray]:
         """Solve, with ``self.refine`` steps of iterative refinement.
+
+        ``rhs_z`` and ``rhs_c`` are vectors, or matrices with one column per
+        right-hand side (one LAPACK call for all: the k columns of a bordered
+        solve).
 
         A stiff obstacle penalty (rho up to 1e10) makes the KKT matrix
         ill-conditioned, and the LU solution's error then lies in the soft
@@ -80,7 +87,7 @@ class KKTFactor:
         """
         d, mu = self._solve(rhs_z, rhs_c)
         for _ in range(self.refine):
-            rz = rhs_z - (self.H @ d + self.C.T @ mu)
+            rz = rhs_z - (self.H @ d + self.CT @ mu)
             rc = rhs_c - self.C @ d
             dd, dmu = self._solve(rz, rc)
             d, mu = d + dd, mu + dmu

@@ -97,8 +97,10 @@ class FastProgram:
             g = mf.gradient(z)
             H = mf.hessian(z)
             factor = mf.kkt_factor(H)
-            r0, _ = factor.solve(-g, -mf.link(z))
-            X = np.column_stack([factor.solve(B[i], np.zeros(mf.N))[0] for i in range(self.k)])
+            # (the Newton right-hand side and B's k rows in one banded solve)
+            R, _ = factor.solve(np.column_stack([-g, B.T]),
+                                np.column_stack([-mf.link(z), np.zeros((mf.N, self.k))]))
+            r0, X = R[:, 0], R[:, 1:]
             S = B @ X
             nu = np.linalg.solve(S, B @ r0 - (s - B @ z))
             d = r0 - X @ nu

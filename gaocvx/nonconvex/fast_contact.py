@@ -173,10 +173,10 @@ class FastContactProgram(FastProgram):
     def _solve(self, H, D, rhs_z, rhs_c):
         """``[[H + B'DB, C'], [C, 0]] x = rhs`` by the banded LU and Woodbury (rank k)."""
         factor = self.mf.kkt_factor(H)
-        y, ymu = factor.solve(rhs_z, rhs_c)
-        cols = [factor.solve(self.B[i], np.zeros(self.mf.N)) for i in range(self.k)]
-        X = np.column_stack([x for x, _ in cols])
-        Xmu = np.column_stack([m for _, m in cols])
+        # (the right-hand side and B's k rows in one banded solve)
+        Y, Ymu = factor.solve(np.column_stack([rhs_z, self.B.T]),
+                              np.column_stack([rhs_c, np.zeros((self.mf.N, self.k))]))
+        y, X, ymu, Xmu = Y[:, 0], Y[:, 1:], Ymu[:, 0], Ymu[:, 1:]
         M = np.eye(self.k) + D[:, None] * (self.B @ X)
         t = np.linalg.solve(M, D * (self.B @ y))
         return y - X @ t, ymu - Xmu @ t

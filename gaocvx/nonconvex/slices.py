@@ -222,10 +222,9 @@ class ContactSlices:
             g, H = mf.gradient(z, **al), mf.hessian(z, **al)
             factor = mf.kkt_factor(H)
             try:
-                r0, m0 = factor.solve(-g, -mf.link(z))
-                cols = [factor.solve(B[i], np.zeros(mf.N)) for i in range(k)]
-                X = np.column_stack([x for x, _ in cols])
-                Xmu = np.column_stack([m for _, m in cols])
+                R, Rmu = factor.solve(np.column_stack([-g, B.T]),
+                                      np.column_stack([-mf.link(z), np.zeros((mf.N, k))]))
+                r0, X, m0, Xmu = R[:, 0], R[:, 1:], Rmu[:, 0], Rmu[:, 1:]
                 nu = np.linalg.solve(B @ X, B @ r0 - (target - B @ z))
             except np.linalg.LinAlgError:
                 return z, nu, False
