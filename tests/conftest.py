@@ -94,3 +94,16 @@ q = -5e8
 gap = 0.007
 stiffness = 5e8
 """
+
+
+def bed_scene_above_the_limit(ratio=3.0, elements=256):
+    """P1 under q = -1e7 N/m on a unilateral bed 5 mm below (1e10 N/m^2), at ``ratio``
+    times its P_bar_h (k = 2 at 3): a node of its search once stalled at a box corner."""
+    from gaocvx import DiscreteProblem, Scene
+    data = {"beam": {"model": "gao", "supports": "P1", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                     "half_thickness": 0.1, "width": 1.0},
+            "load": {"q": -1e7}, "mesh": {"elements": elements},
+            "foundation": {"kind": "unilateral", "gap": 0.005, "stiffness": 1e10}}
+    data["load"]["axial"] = ratio * DiscreteProblem(Scene.from_dict(data),
+                                                    check_convexity=False).P_bar_h
+    return data

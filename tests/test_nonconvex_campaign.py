@@ -129,13 +129,8 @@ def test_a_node_program_stopped_short_is_split_not_closed():
     came out `inaccurate` with a gap of 0.062 of the energy scale; the box is now
     split and the answer certified.  The independent multi-start checks it."""
     from campaign import Case
-    from gaocvx.discrete import DiscreteProblem
-    data = {"beam": {"model": "gao", "supports": "P1", "length": 1.0, "E": 2.1e11, "nu": 0.3,
-                     "half_thickness": 0.1, "width": 1.0},
-            "load": {"q": -1e7}, "mesh": {"elements": 256},
-            "foundation": {"kind": "unilateral", "gap": 0.005, "stiffness": 1e10}}
-    data["load"]["axial"] = 3.0 * DiscreteProblem(Scene.from_dict(data),
-                                                  check_convexity=False).P_bar_h
+    from conftest import bed_scene_above_the_limit
+    data = bed_scene_above_the_limit()
     rec = run_case(Case(data, ("P1", "foundation", "uniform"), "P1-3x-bed-256"), starts=6,
                    seed=3)
     assert not rec["violations"], rec["violations"]

@@ -13,7 +13,7 @@ import pytest
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from conftest import scene_dict
+from conftest import bed_scene_above_the_limit, scene_dict
 from independent import BeamProblem
 
 from gaocvx import DiscreteProblem, Scene
@@ -303,12 +303,7 @@ def test_a_node_started_at_a_box_corner_reaches_its_minimum():
     from gaocvx.nonconvex.minimum import rescale_for
     from gaocvx.nonconvex.modes import unstable_modes
 
-    data = {"beam": {"model": "gao", "supports": "P1", "length": 1.0, "E": 2.1e11, "nu": 0.3,
-                     "half_thickness": 0.1, "width": 1.0},
-            "load": {"q": -1e7}, "mesh": {"elements": 256},
-            "foundation": {"kind": "unilateral", "gap": 0.005, "stiffness": 1e10}}
-    data["load"]["axial"] = 3.0 * DiscreteProblem(Scene.from_dict(data),
-                                                  check_convexity=False).P_bar_h
+    data = bed_scene_above_the_limit()
     dp = DiscreteProblem(Scene.from_dict(data), check_convexity=False)
     modes = unstable_modes(dp)
     assert modes.k == 2
