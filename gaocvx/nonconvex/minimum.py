@@ -155,27 +155,18 @@ def fast_eligible(dp, k: int) -> bool:
 def fast_by_default(dp, k: int) -> bool:
     """Whether :func:`solve_global` takes the fast path unless told.
 
-    Wherever it serves: faster than the dense programs for one or two modes
-    (measured at 16-32 elements: 2-10 times); for three since each projected
-    Newton step's box QP is solved by an active set (P1 at 5 P_bar_h: 11 s
-    against 20 s at 16 elements, 15 s against 93 s at 64; at 100 the dense
-    programs stopped at their 120 s with a gap of 2e-4 of the scale, the fast
-    path certified in 40 s; before the active set it took 45 s against 23 s at
-    16 elements); for four and five (P1 at 8 P_bar_h, k = 4: 48 s against
-    48 s at 16 elements, 56 s against 335 s at 64; at k = 5 the dense programs'
-    bounds stalled at Clarabel's accuracy, 1.7e-7 of the energy scale, P1 at
-    12 P_bar_h on 32 elements, where the fast path certified 1e-11).  With
-    an obstacle beyond DENSE_OBSTACLE_ELEMENTS: the dense programs, its ground
-    truth, take 2.7 s a node at 128 elements (a channel took over 600 s,
-    campaign scene 11:11), and on the seed-1 campaign at 8-32 elements with the
-    fast path forced for every obstacle nothing was wrong (0 violations, 62
-    optimal, median 0.4 s).  With an obstacle and four modes or more at every
-    mesh: the dense programs' bounds stall there too (k = 5, P4 on 10
-    elements: 480 s, gap 5e-2 of the scale, `inaccurate`; fast 33 s, certified)
-    and their nodes cost more (the six-mode obstacles and channels of the seed-61
-    and seed-62 campaigns, 8-12 elements: 544-1102 s and one `inaccurate` at its
-    960 s, against 103-241 s fast, every one certified; one five-mode channel
-    took 67 s fast against 38 s dense).
+    Wherever it serves (docs/nonconvex.md has the measurements): for one to
+    three modes it is faster than the dense programs (P1 at 5 P_bar_h, k = 3:
+    11 s against 20 s at 16 elements; at 100 the dense programs stopped
+    uncertified at their 120 s); from four modes on their bounds stall at
+    Clarabel's accuracy (1.7e-7 of the energy scale at k = 5).  With an
+    obstacle beyond DENSE_OBSTACLE_ELEMENTS (the dense programs, its ground
+    truth, take 2.7 s a node at 128 elements; the seed-1 campaign with the
+    fast path forced for every obstacle: 0 violations), and from four modes
+    at every mesh (P4, k = 5, 10 elements: dense 480 s `inaccurate`, fast 33 s;
+    the six-mode obstacles of seeds 61 and 62: 544-963 s dense, one
+    `inaccurate`, against 138-241 s; channels are mixed, 60-1102 s against
+    197-306 s).
     """
     n_el = dp.n_nodes - 1
     if dp.contact == "obstacle":
