@@ -415,7 +415,9 @@ def compare_figure(results: dict):
              annotate=i == 0, color=colors.get(model))
     methods = {r.method for r in results.values()} - {DEFAULT_METHOD}
     named = f", method {', '.join(sorted(methods))}" if methods else ""
-    ax.set_title(f"Euler-Bernoulli and Gao, supports {result.scene.beam.supports}{named}",
-                 fontsize=10)
+    # (above the Euler-Bernoulli limit only the Gao answer is drawn)
+    models = " and ".join({"euler-bernoulli": "Euler-Bernoulli", "gao": "Gao"}.get(m, m)
+                          for m in results)
+    ax.set_title(f"{models}, supports {result.scene.beam.supports}{named}", fontsize=10)
     fig.tight_layout()
     return fig

@@ -82,6 +82,11 @@ def test_compare_above_the_euler_bernoulli_limit_gives_gao_and_the_refusal(tmp_p
     assert data["comparison"] == {"min_w_ratio": None, "energy_ratio": None}
     assert err.startswith("error: euler-bernoulli: load.axial: ") and err.count("\n") == 1
     assert (tmp_path / "c.png").exists()
+    from gaocvx.plot import compare_figure
+    from gaocvx.solve import solve as solve_scene
+    from gaocvx.scene import load_scene
+    fig = compare_figure({"gao": solve_scene(load_scene(scene))})
+    assert fig.axes[0].get_title().startswith("Gao, supports P4")
     # The Gao answer is the one `solve` gives for the scene.
     assert main(["solve", str(scene), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["energy"] == pytest.approx(data["gao"]["energy"],
