@@ -11,6 +11,7 @@ import scipy.sparse as sp
 from .. import fem
 from ..cache import LRU
 from ..discrete import CONTACT_POINTS, GAO_POINTS, DiscreteProblem
+from ..linalg import VectorCSR
 
 
 __all__ = ["MixedStructure", "structure_of", "structure_key", "clear_cache"]
@@ -121,6 +122,10 @@ class MixedStructure:
         vals = np.stack([np.ones(N), -np.ones(N), -h], 1).ravel()
         self.C = sp.csr_matrix((vals, (rows, cols)), shape=(N, self.nz))[:, self.free].tocsr()
         self.CT = self.C.T.tocsr()   # (a transpose per refinement step cost a sixth of a search)
+        # Products with vectors are the solvers' inner loop: scipy's kernel called directly.
+        for name in ("B2", "B2T", "B1", "B1T", "Nq", "NqT", "A", "AT", "C", "CT"):
+            if hasattr(self, name):
+                setattr(self, name, VectorCSR(getattr(self, name)))
         self._layout()
         self.base_factors = LRU(4)  # KKT factors of H0, by p (see MixedForm.quadratic_factor)
         self._stacked = {}  # stacked weight maps, by the terms present (see stacked_map)
