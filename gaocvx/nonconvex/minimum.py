@@ -50,12 +50,13 @@ from ..errors import SceneError
 from ..mixed import MixedForm
 from ..newton import answer, certify, passes
 from . import bnb, dual
-from .bnb import branch_and_bound, components
+from .alternatives import other_minimisers
+from .bnb import branch_and_bound
 from .bounds import amplitude_box, check_bounded, load_constant
 from .certificate import certify_contact
 from .modes import unstable_modes
 from .node import NodeProgram
-from .polish import feasible_energy, polish, reflections, to_mixed
+from .polish import feasible_energy, polish, to_mixed
 
 __all__ = ["solve_global", "GAP_TOL", "GAP_TARGET", "MAX_ELEMENTS", "MAX_MODES", "to_mixed",
            "rescale_for"]
@@ -95,12 +96,6 @@ TIME_ELEMENTS = 2048
 # module's notes); False: the branch and bound alone (tests and benchmarks
 # compare the two).
 DUAL_BOUND = True
-# Leaves within the gap of the best that are grouped in search of other
-# minimisers (those with the lowest bounds; grouping 5000 takes about a second).
-NEAR_LEAVES = 5000
-# Two minimisers are distinct when their deflections differ by more than this,
-# relative to the larger one's G-norm (sqrt ∫ (w')^2).
-DISTINCT = 1e-6
 
 
 def one_mode_amplitude(dp, modes) -> float:
@@ -286,60 +281,9 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     best_e = dp.energy(best_u)
     tol = max(out.gap, GAP_TARGET * scale)
 
-    # Other minimisers: leaves within the gap of the best, grouped by contact.
-    near = [leaf for leaf in out.leaves if leaf.lower <= best_e + tol and leaf.s is not None]
-    # (the NEAR_LEAVES lowest: with six modes some 10^5 leaves lay within the gap,
-    # and grouping them took minutes)
-    near = sorted(near, key=lambda leaf: leaf.lower)[:NEAR_LEAVES]
-    alternatives = []
-    norm = lambda x: math.sqrt(max(float(x @ (dp.G @ x)), 0.0))  # noqa: E731
-    # (the groups with the lowest bounds first: at most 16 are searched)
-    groups = sorted(components(near), key=lambda group: min(leaf.lower for leaf in group))
-    for group in groups[:16]:
-        glo = np.min([leaf.lo for leaf in group], axis=0)
-        ghi = np.max([leaf.hi for leaf in group], axis=0)
-        if np.all(glo <= best_s) and np.all(best_s <= ghi):
-            continue
-        seed = min(group, key=lambda leaf: leaf.lower)
-        s2, u2, lam2 = polish(dp, prog, seed.s, seed.u, None, glo, ghi)
-        e2 = dp.energy(u2)
-        if e2 > best_e + tol:
-            continue
-        known = [best_u] + [a[1] for a in alternatives]
-        if any(norm(u2 - x) <= DISTINCT * max(norm(u2), norm(x)) for x in known):
-            continue
-        if e2 < best_e:  # the other one is lower: it becomes the answer
-            alternatives.append((best_e, best_u, best_s, lam))
-            best_e, best_u, best_s, lam = e2, u2, s2, lam2
-        else:
-            alternatives.append((e2, u2, s2, lam2))
-
-    # The mirror image: near P_bar_h the leaves around +s and -s merge into one group
-    # with the answer's (without load, 1e-9 above the limit, unique was reported).
-    # Likewise the image in x -> L - x (and its negative): an antisymmetric mode's
-    # small amplitude +-s_2 of a P1 beam in a channel (k = 2, 256 elements) fell in
-    # one group, and unique was reported.  Each counts if admissible, within the
-    # gap and distinct; for a scene without that symmetry its energy differs.
-    # An image is polished first, as the groups' candidates are: a scene whose
-    # asymmetry is below the gap (a P1 beam buckled 0.2 m under a small table load,
-    # 2e-7 m from symmetric) has an image within the gap that is no equilibrium;
-    # polished, it falls back onto the answer (campaign scene 1:66).
-    # An exact image (a symmetric scene) is kept as it is, else the polished point.
-    feasible = feasible_energy(dp, prog)
-    for u2 in [-best_u] + reflections(dp, best_u):
-        e2 = feasible(u2)
-        known = [best_u] + [a[1] for a in alternatives]
-        if not e2 <= best_e + tol or any(norm(u2 - x) <= DISTINCT * norm(best_u)
-                                         for x in known):
-            continue
-        s_img = modes.phi.T @ (dp.G @ u2)
-        s2, p2, lam2 = polish(dp, prog, s_img, u2, None, lo, hi)
-        if any(norm(p2 - x) <= DISTINCT * norm(best_u) for x in known):
-            continue   # no minimiser of its own: it falls back onto a known one
-        if norm(p2 - u2) <= DISTINCT * norm(best_u):
-            alternatives.append((e2, u2, s_img, None))
-        elif (ep := feasible(p2)) <= best_e + tol:
-            alternatives.append((ep, p2, s2, lam2))
+    # Other minimisers: leaves within the gap of the best, and the images of the best.
+    (best_e, best_u, best_s, lam), alternatives = other_minimisers(
+        dp, prog, out, (best_e, best_u, best_s, lam), lo, hi, tol)
 
     mf = MixedForm.on_obstacle(dp) if dp.contact == "obstacle" else MixedForm(dp)
     z = mf.on_manifold(to_mixed(mf, best_u))
