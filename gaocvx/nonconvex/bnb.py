@@ -3,8 +3,9 @@
 Each box ``[lo, hi]`` of amplitudes gets the lower bound of its node program
 (:class:`.node.NodeProgram`, the concave part replaced by its chord) and
 contributes an upper bound, the true energy at the program's minimiser.
-The box with the smallest lower bound is split at its midpoint along the
-coordinate with the largest chord error ``c_i (hi_i - lo_i)^2 / 4``; boxes
+The box with the smallest lower bound is split along the coordinate with the
+largest chord error ``c_i (hi_i - lo_i)^2 / 4``, through its node program's
+minimiser (kept within the middle half, :func:`split_point`); boxes
 whose lower bound lies within ``tol`` of the best upper bound are closed.
 The chord error on a box bounds the gap between its bounds, so the bounds
 meet.  The search stops when the best upper bound minus the smallest lower
@@ -48,7 +49,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-__all__ = ["Leaf", "BnBResult", "branch_and_bound", "components", "rescaled_leaves"]
+__all__ = ["Leaf", "BnBResult", "branch_and_bound", "components", "rescaled_leaves", "split_point"]
 
 log = logging.getLogger(__name__)
 
@@ -105,7 +106,10 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
     ----------
     prog : NodeProgram
         ``prog.solve_box(lo, hi)`` returns a node's ``lower``, ``s``, ``u``,
-        ``lam`` and ``ok``; ``prog.modes.c`` are the concave coefficients.
+        ``lam`` and ``ok``; ``prog.modes.c`` are the concave coefficients.  A
+        program with ``takes_cutoff`` true is called with ``cutoff``, the level
+        above which its bound closes the box: it may stop as soon as its bound
+        exceeds it.
     energy : callable
         The true (non-dimensional) energy of free DOFs ``u``.
     lo, hi : array_like
@@ -140,7 +144,9 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
 
     def evaluate(lo, hi, parent):
         nonlocal nodes
-        sol = prog.solve_box(lo, hi)
+        # A program that can stop once its bound closes the box is told where that is.
+        sol = (prog.solve_box(lo, hi, cutoff=best[0] - tol)
+               if getattr(prog, "takes_cutoff", False) else prog.solve_box(lo, hi))
         nodes += 1
         if sol.u is not None:
             e = energy(sol.u)  # inf for a point that is not feasible
@@ -199,7 +205,7 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
             closed.append(leaf)
             continue
         i = int(np.argmax(c * width**2))
-        mid = 0.5 * (leaf.lo[i] + leaf.hi[i])
+        mid = split_point(leaf, i)
         for a, b in ((leaf.lo[i], mid), (mid, leaf.hi[i])):
             clo, chi = leaf.lo.copy(), leaf.hi.copy()
             clo[i], chi[i] = a, b
@@ -216,6 +222,32 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
              lower, len(leaves))
     return BnBResult(best[0], lower, best[1], best[2], best[3], nodes, leaves,
                      converged, failed)
+
+
+def split_point(leaf: Leaf, i: int) -> float:
+    """Where ``leaf`` is split along amplitude ``i``: at its node program's minimiser,
+    kept within the middle half of the box (the midpoint when it has none).
+
+    The chord of ``-c_i s_i^2`` is exact at the ends of a box, so a split through the
+    relaxation's minimiser makes both children's chords exact there and raises their
+    bounds where the parent's was lowest (omega-subdivision, as in alpha-BB).
+    Measured at 32 elements, the same answers: P1 at 5 P_bar_h (k = 3) 951 -> 707
+    nodes, a P4 beam on a bonded bed at 3 P_hat_h (k = 4) 5007 -> 3835, P1 on a
+    unilateral bed (k = 2) 231 -> 179, P4 without load 87 -> 63.  Every child still
+    has at most three quarters of its parent's width, so the search converges as
+    with bisection.
+
+    Examples
+    --------
+    >>> leaf = Leaf(0.0, np.array([0.0, 0.0]), np.array([4.0, 4.0]), np.array([0.2, 3.0]), None, True)
+    >>> split_point(leaf, 0), split_point(leaf, 1)
+    (1.0, 3.0)
+    """
+    lo, hi = float(leaf.lo[i]), float(leaf.hi[i])
+    if leaf.s is None or not np.isfinite(leaf.s[i]):
+        return 0.5 * (lo + hi)
+    quarter = 0.25 * (hi - lo)
+    return float(min(max(float(leaf.s[i]), lo + quarter), hi - quarter))
 
 
 def rescaled_leaves(leaves, ratio: float) -> list:

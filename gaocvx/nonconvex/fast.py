@@ -53,6 +53,9 @@ __all__ = ["FastProgram", "box_qp"]
 # value and its convexity bound at which they stop.
 MAX_OUTER = 30
 BOUND_TOL = 1e-14
+# What a node's bound allows for the slice solves' own accuracy (Newton to
+# round-off, ~1e-16 of the energy), relative to its value.
+SLICE_ACCURACY = 1e-13
 
 
 class FastProgram:
@@ -170,7 +173,10 @@ class FastProgram:
     def obstacle_multipliers(self):
         return None
 
-    def solve_box(self, lo, hi) -> NodeSolution:
+    # bnb passes the level above which a node's bound closes its box (``cutoff``).
+    takes_cutoff = True
+
+    def solve_box(self, lo, hi, cutoff: float = math.inf) -> NodeSolution:
         """Minimise ``G(s) = F(s) + sum c_i s_i^2 + chord`` on ``[lo, hi]``; bound by convexity.
 
         Projected Newton with the exact Hessian ``S^-1 + 2 diag(c)``: each step
@@ -178,7 +184,10 @@ class FastProgram:
         a backtracking line search on G keeps the values falling.  Whatever the
         last point ``s0``, ``G(s0) + min_box G'(s0)(s - s0)`` is a lower bound
         (G is convex); the iteration stops when it lies within
-        :data:`BOUND_TOL` of ``G(s0)``.
+        :data:`BOUND_TOL` of ``G(s0)``, or as soon as it lies above ``cutoff``:
+        the branch and bound closes such a box whatever its exact minimum (far
+        boxes, most of a many-mode search, then take one or two slice solves
+        instead of a dozen).
         """
         lo, hi = np.asarray(lo, float), np.asarray(hi, float)
         c = np.asarray(self.modes.c, float)
@@ -198,7 +207,8 @@ class FastProgram:
         for _ in range(MAX_OUTER):
             if not (ok and np.all(np.isfinite(hess))):
                 break
-            if value - lower <= BOUND_TOL * max(abs(value), 1.0):
+            if value - lower <= BOUND_TOL * max(abs(value), 1.0) or \
+                    lower - SLICE_ACCURACY * max(abs(value), 1.0) > cutoff:
                 break
             d = box_qp(hess, grad, lo - s, hi - s)
             t, slope_d = 1.0, float(grad @ d)
@@ -221,7 +231,7 @@ class FastProgram:
             lower = max(lower, bound(s, value, grad))
         self._s = s
         # the slice solves' own accuracy (Newton to round-off, ~1e-16 of the energy)
-        lower -= 1e-13 * max(abs(value), 1.0)
+        lower -= SLICE_ACCURACY * max(abs(value), 1.0)
         return NodeSolution(lower, value, s, u, None, ok, "optimal" if ok else "inaccurate")
 
 

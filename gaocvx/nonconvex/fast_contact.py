@@ -125,6 +125,9 @@ class FastContactProgram(FastProgram):
     modes : Modes
     """
 
+    # (its node's bound comes from the method of multipliers at the end: no early stop)
+    takes_cutoff = False
+
     def __init__(self, dp, modes):
         super().__init__(dp, modes)
         self.mf = mf = MixedForm.on_obstacle(dp)   # same structure; w - g from small numbers
