@@ -65,3 +65,43 @@ def test_a_box_at_its_programs_accuracy_closes_within_accept_and_the_gap_says_so
     true_min = -0.25
     assert out.lower <= true_min <= out.upper + 1e-12
     assert abs(out.gap - 3.75) <= 1e-6
+
+
+class Counting(Toy):
+    """The exact toy, counting the node programs and the boxes they were asked for."""
+
+    def __init__(self):
+        super().__init__()
+        self.boxes = []
+
+    def solve_box(self, lo, hi):
+        self.boxes.append((float(lo[0]), float(hi[0])))
+        return super().solve_box(lo, hi)
+
+
+def basins_of_the_toy(u, s, lam):
+    """The toy's basins by calculus: F'' = 12 s^2 - 2 > 0 for |s| > 1/sqrt 6, so F is
+    convex on [1/sqrt 6, 2] (and its mirror), where its minimum is -1/4."""
+    from gaocvx.nonconvex.basin import Basin
+    sign = 1.0 if s[0] > 0 else -1.0
+    m = sign / math.sqrt(2.0)
+    lo, hi = sorted((sign * 0.45, sign * 2.0))
+    return Basin(np.array([lo]), np.array([hi]), -0.25 - 1e-12, np.array([m]), np.array([m]),
+                 1.0, np.zeros(1))
+
+
+def test_boxes_inside_a_basin_close_on_its_bound_without_a_node_program():
+    plain, with_basins = Counting(), Counting()
+    out0 = branch_and_bound(plain, energy, [-2.0], [2.0], tol=1e-8)
+    out1 = branch_and_bound(with_basins, energy, [-2.0], [2.0], tol=1e-8,
+                            start=(energy(np.array([0.7])), np.array([0.7]), np.array([0.7]), None),
+                            basin=basins_of_the_toy)
+    assert abs(out1.upper + 0.25) <= 1e-12 and 0.0 <= out1.gap <= 1e-8
+    assert out0.lower <= out1.upper and out1.lower <= out0.upper
+    assert len(out1.basins) == 2          # both minimisers' basins were found
+    assert len(with_basins.boxes) < len(plain.boxes) / 2
+    # no node program was asked for a box inside the start's basin (proved first)
+    first = out1.basins[0]
+    assert first.s[0] > 0
+    for lo, hi in with_basins.boxes:
+        assert not first.contains(np.array([lo]), np.array([hi]))

@@ -56,6 +56,11 @@ log = logging.getLogger(__name__)
 # Seconds of branch and bound before it stops, uncertified (the answer is then
 # `inaccurate` with the gap reached).
 TIME_LIMIT = 120.0
+# Basins (the ``basin`` argument): tried at most MAX_BASINS times, on node answers
+# within NEAR times the accepted gap of the best energy that lie outside every
+# basin found and the points that polished to it.
+MAX_BASINS = 16
+NEAR = 1000.0
 
 
 @dataclass
@@ -78,7 +83,8 @@ class BnBResult:
     ``upper`` is the best energy found (at ``u``, amplitudes ``s``), ``lower``
     the smallest lower bound of any leaf, ``gap = upper - lower`` the
     certificate; ``leaves`` are the final boxes, ``nodes`` the node programs
-    solved, ``failed`` those the solver did not report optimal among the leaves.
+    solved, ``failed`` those the solver did not report optimal among the leaves,
+    ``basins`` the boxes proved around local minimisers (each holds one).
     """
 
     upper: float
@@ -91,6 +97,7 @@ class BnBResult:
     converged: bool = True
     failed: int = 0
     certificate: str = "branch and bound"   # (dual.shortcut's: "dual bound", no nodes)
+    basins: list = field(default_factory=list, repr=False)   # proved (see ``basin``)
 
     @property
     def gap(self) -> float:
@@ -99,7 +106,7 @@ class BnBResult:
 
 def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
                      start=None, leaves=None, time_limit: float = TIME_LIMIT,
-                     accept: float | None = None) -> BnBResult:
+                     accept: float | None = None, basin=None) -> BnBResult:
     """Minimise the energy over the box ``[lo, hi]`` of amplitudes, to a certified gap ``tol``.
 
     Parameters
@@ -132,6 +139,14 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
         The gap the caller certifies (at least ``tol``; by default ``tol``).  A box
         is closed at its node program's accuracy (its value less its bound) only if
         its bound lies within ``accept`` of the best energy: else it is split.
+    basin : callable, optional
+        ``basin(u, s, lam)`` polishes a candidate to a local minimiser and returns
+        a box of amplitudes around it on which no deflection lies below a
+        proved bound (:class:`.basin.Basin`), or None.  It is tried on the start
+        and on node answers within ``NEAR`` times ``accept`` of the best energy
+        that lie outside every basin found and the points that polished to it
+        (at most ``MAX_BASINS`` tries); a box inside a basin takes the basin's
+        bound without a node program.
     """
     c = np.asarray(prog.modes.c, float)
     # A wall-clock limit: with constraints each node is a solve of its own, and a
@@ -142,8 +157,35 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
     counter = itertools.count()
     nodes = 0
 
+    # basins[i] with the box of the points that polished to it (not tried again)
+    basins, catchments, tries = [], [], [0]
+
+    def try_basin(u, s, lam):
+        """A proved basin around the local minimiser that ``(u, s)`` polishes to."""
+        if basin is None or u is None or s is None or tries[0] >= MAX_BASINS:
+            return
+        if any(np.all(lo <= s) and np.all(s <= hi) for lo, hi in catchments):
+            return
+        tries[0] += 1
+        found = basin(u, s, lam)
+        if found is None:
+            return
+        for i, b in enumerate(basins):
+            if b.contains(found.s, found.s):   # a known minimiser again
+                catchments[i] = (np.minimum(catchments[i][0], s), np.maximum(catchments[i][1], s))
+                return
+        basins.append(found)
+        catchments.append((np.minimum(found.lo, s), np.maximum(found.hi, s)))
+        e = energy(found.u)
+        if e < best[0]:
+            best[:] = [e, found.u, found.s, None]
+
     def evaluate(lo, hi, parent):
         nonlocal nodes
+        for b in basins:
+            if b.contains(lo, hi):
+                # Proved: no deflection with these amplitudes lies below b.lower.
+                return Leaf(max(b.lower, parent.lower), lo, hi, b.s, b.u, True, 0.0)
         # A program that can stop once its bound closes the box is told where that is.
         sol = (prog.solve_box(lo, hi, cutoff=best[0] - tol)
                if getattr(prog, "takes_cutoff", False) else prog.solve_box(lo, hi))
@@ -152,6 +194,8 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
             e = energy(sol.u)  # inf for a point that is not feasible
             if e < best[0]:
                 best[:] = [e, sol.u, sol.s, sol.lam]
+            if sol.ok and e <= best[0] + NEAR * accept:
+                try_basin(sol.u, sol.s, sol.lam)
         if sol.ok:
             # A child lies inside its parent: the parent's bound holds for it too.
             noise = getattr(sol, "value", sol.lower) - sol.lower
@@ -161,6 +205,8 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
         # (and is split further if it matters).
         return Leaf(parent.lower, lo, hi, sol.s, sol.u, parent.ok)
 
+    if start is not None:
+        try_basin(start[1], start[2], start[3])
     closed = []
     if leaves is None:
         root = evaluate(np.asarray(lo, float), np.asarray(hi, float),
@@ -206,6 +252,9 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
             continue
         i = int(np.argmax(c * width**2))
         mid = split_point(leaf, i)
+        cut = _carve(leaf, basins, c)
+        if cut is not None:
+            i, mid = cut
         for a, b in ((leaf.lo[i], mid), (mid, leaf.hi[i])):
             clo, chi = leaf.lo.copy(), leaf.hi.copy()
             clo[i], chi[i] = a, b
@@ -221,7 +270,28 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
     log.info("branch and bound: %d nodes, upper %.12g, lower %.12g, %d leaves", nodes, best[0],
              lower, len(leaves))
     return BnBResult(best[0], lower, best[1], best[2], best[3], nodes, leaves,
-                     converged, failed)
+                     converged, failed, basins=basins)
+
+
+def _carve(leaf: Leaf, basins, c):
+    """``(i, x)``: a split of ``leaf`` along a face of a basin it overlaps, or None.
+
+    A box across a basin's face is cut there (along the amplitude whose chord
+    error is largest among those with a face inside the box, at most 2k cuts):
+    the part inside then closes on the basin's bound without a node program.
+    """
+    best = None
+    for b in basins:
+        if np.any(leaf.lo >= b.hi) or np.any(leaf.hi <= b.lo):
+            continue
+        width = leaf.hi - leaf.lo
+        for face in (b.lo, b.hi):
+            inside = (face > leaf.lo + 1e-3 * width) & (face < leaf.hi - 1e-3 * width)
+            for i in np.flatnonzero(inside):
+                err = c[i] * width[i] ** 2
+                if best is None or err > best[0]:
+                    best = (err, int(i), float(face[i]))
+    return None if best is None else best[1:]
 
 
 def split_point(leaf: Leaf, i: int) -> float:

@@ -50,6 +50,7 @@ from ..errors import SceneError
 from ..mixed import MixedForm
 from ..newton import answer, certify, passes
 from . import bnb, dual
+from .basin import BasinProver
 from .alternatives import other_minimisers
 from .bnb import branch_and_bound
 from .bounds import amplitude_box, check_bounded, load_constant
@@ -96,6 +97,9 @@ TIME_ELEMENTS = 2048
 # module's notes); False: the branch and bound alone (tests and benchmarks
 # compare the two).
 DUAL_BOUND = True
+# Whether the branch and bound closes the boxes around its local minimisers by a
+# proved basin (:mod:`.basin`); False: by node programs alone (tests compare).
+BASINS = True
 
 
 def one_mode_amplitude(dp, modes) -> float:
@@ -233,6 +237,19 @@ def solve_global(dp, modes=None, max_nodes: int | None = None,
     return dp, raw, info
 
 
+def _basins(dp, prog, lo, hi):
+    """The branch and bound's ``basin`` (:mod:`.basin`): polish, then prove a box around
+    the local minimiser (None with an obstacle, or with BASINS off)."""
+    if not BASINS or dp.contact == "obstacle":
+        return None
+    prover = BasinProver(dp, prog.modes)
+
+    def find(u, s, lam):
+        s2, u2, _ = polish(dp, prog, s, u, lam, lo, hi)
+        return prover.prove(u2)
+    return find
+
+
 def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     k = modes.k
     if fast and dp.contact == "obstacle":
@@ -274,7 +291,7 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     if out is None:
         out = branch_and_bound(prog, feasible_energy(dp, prog), lo, hi, GAP_TARGET * scale,
                                max_nodes, start, leaves=leaves, time_limit=time_limit(dp, k),
-                               accept=0.5 * GAP_TOL * scale)
+                               accept=0.5 * GAP_TOL * scale, basin=_basins(dp, prog, lo, hi))
     if out.s is None:
         out.s = start[2]
     best_s, best_u, lam = polish(dp, prog, out.s, out.u, out.lam, lo, hi)
