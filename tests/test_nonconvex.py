@@ -127,6 +127,19 @@ def test_below_the_limit_the_global_method_is_the_convex_ground_truth():
     assert solve(scene).method == "newton"
 
 
+def test_below_the_limit_a_beam_pressed_flat_is_certified_where_clarabel_stops_short():
+    """A P1 beam pushed down onto an obstacle at its own level lies flat: w = 0 exactly
+    (the energy, 0 there, is convex and cannot go lower with w >= 0 and a downward
+    load).  Clarabel stops at "optimal_inaccurate" (stationarity inf: found by a
+    hidden-scene trial); the global method below the limit then returns the Newton
+    path's certified answer instead of an uncertified one."""
+    scene = Scene.from_dict(scene_dict("P1", q=-1e8, axial=0.0, obstacle=0.0, elements=16))
+    r = solve(scene, "global")
+    assert r.status == "optimal" and r.method == "global"
+    assert r.extra["global"]["unstable_modes"] == 0
+    assert np.max(np.abs(r.w)) <= 1e-15 and abs(r.energy) <= 1e-12
+
+
 # --------------------------------------------------------------------- q = 0
 def test_without_load_w0_is_unstable_and_the_two_mirror_minima_are_reported():
     scene = p4(q=None, axial=1.3e9)
