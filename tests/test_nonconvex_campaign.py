@@ -158,6 +158,27 @@ def test_channel_near_the_limit_re_solved_in_its_own_scale():
     assert rec["nodes"] < 1000, rec["nodes"]   # it stopped at 2569 (the 120 s clock)
 
 
+def test_a_channel_far_narrower_than_the_free_buckle_is_searched_in_its_own_units():
+    """A hidden-scene trial's P3 beam in a channel (1.18 cm below, 0.84 cm above, table
+    load, 1.4 P_bar_h, 16 elements): its free one-mode amplitude is 18 times the channel,
+    and in those units the dense node programs stalled at a gap of 0.077 for their
+    whole 120 s (629 nodes) before the search in the answer's own scale certified it.
+    The search now starts in the channel's units; the independent multi-start checks it."""
+    data = {"beam": {"model": "gao", "supports": "P3", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                     "half_thickness": 0.1, "width": 1.0},
+            "load": {"q": [[0.35, -489819.7733347663], [0.55, -874806.7477696814],
+                           [0.65, 1284838.1922734468], [0.9, -2747513.1296138694]],
+                     "axial": 1645982998.9259477},
+            "obstacle": {"gap": 0.01176280463872833, "gap_above": 0.008358813324271557},
+            "mesh": {"elements": 16}}
+    from campaign import Case
+    rec = run_case(Case(data, ("P3", "channel", "table"), "trial-p3-channel"), starts=8,
+                   seed=7)
+    assert not rec["violations"], rec["violations"]
+    assert rec["status"] == "optimal", rec.get("message")
+    assert rec["nodes"] < 100, rec["nodes"]   # 629 + 24 before
+
+
 def test_an_image_within_the_gap_that_is_no_equilibrium_is_not_reported():
     """Campaign scene 1:66: a P1 beam buckled 0.2 m under a small table load is 2e-7 m
     from symmetric, so its image in x -> L - x lay within the certified gap and was

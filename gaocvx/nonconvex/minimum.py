@@ -7,7 +7,8 @@ Steps (nonconvex.md):
 2. a refusal when nothing bounds the energy from below (:func:`.bounds.check_bounded`);
 3. the deflection scale set to the expected answer's size: the larger of the
    linear answer and the one-mode buckling amplitude
-   ``A^2 = 3 (p - lambda_1) / (a ∫ (phi_1')^4)`` (non-dimensional);
+   ``A^2 = 3 (p - lambda_1) / (a ∫ (phi_1')^4)`` (non-dimensional), or a
+   channel's width where that is far smaller (:func:`rescale_for`);
 4. a box of amplitudes containing every minimiser (:mod:`.bounds`), tightened
    by the best energy of a few fixed-amplitude solves;
 5. the dual bound (:mod:`.dual`, no obstacle): the best first candidate
@@ -125,9 +126,22 @@ def scene_energy(dp, modes) -> float:
 
 
 def rescale_for(dp, modes):
-    """``dp`` measured in the expected answer's size (step 3 of the module's notes)."""
+    """``dp`` measured in the expected answer's size (step 3 of the module's notes).
+
+    The one-mode amplitude, where larger than the linear answer; a channel holds
+    the beam within its wider surface's distance, and that is the size where
+    more than ten times smaller (the range within which a search's units serve,
+    as for its second search: a P3 beam in a channel 2 cm wide buckled to 1/18
+    of its free amplitude, and the dense programs, their tolerances absolute in
+    those units, stalled at a gap of 0.077 of it for their 120 s, then certified
+    in 1.4 s in the answer's own scale).
+    """
     A = one_mode_amplitude(dp, modes)
     size = A * float(np.max(np.abs(modes.phi[dp._w_rows(), 0]), initial=0.0))
+    if dp.contact == "obstacle" and dp.g_above is not None:
+        wall = max(float(np.max(np.abs(dp.g))), float(dp.g_above))
+        if 0.0 < wall < 0.1 * max(size, 1.0):
+            return dp.rescaled(dp.W * wall)
     return dp.rescaled(dp.W * size) if size > 1.0 else dp
 
 
