@@ -105,3 +105,17 @@ def test_boxes_inside_a_basin_close_on_its_bound_without_a_node_program():
     assert first.s[0] > 0
     for lo, hi in with_basins.boxes:
         assert not first.contains(np.array([lo]), np.array([hi]))
+
+
+def test_a_basin_whose_bound_would_not_close_its_boxes_is_not_used():
+    """A basin's bound 1 below its minimum (a polish that stopped short): boxes inside
+    it would keep that bound and be split without end.  It is not taken; the search
+    certifies the minimum by its node programs as without basins."""
+    def loose(u, s, lam):
+        b = basins_of_the_toy(u, s, lam)
+        return type(b)(b.lo, b.hi, b.lower - 1.0, b.s, b.u, b.margin, b.eta)
+
+    out = branch_and_bound(Counting(), energy, [-2.0], [2.0], tol=1e-8, basin=loose,
+                           start=(energy(np.array([0.7])), np.array([0.7]), np.array([0.7]), None))
+    assert out.converged and 0.0 <= out.gap <= 1e-8 and abs(out.upper + 0.25) <= 1e-12
+    assert out.basins == []

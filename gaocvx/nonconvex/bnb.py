@@ -174,11 +174,15 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
             if b.contains(found.s, found.s):   # a known minimiser again
                 catchments[i] = (np.minimum(catchments[i][0], s), np.maximum(catchments[i][1], s))
                 return
-        basins.append(found)
-        catchments.append((np.minimum(found.lo, s), np.maximum(found.hi, s)))
         e = energy(found.u)
         if e < best[0]:
             best[:] = [e, found.u, found.s, None]
+        if not found.lower > best[0] - tol:
+            # (a bound that does not close its boxes would only have them split
+            # again and again: a polish that stopped short, r'G^-1 r / 2m too large)
+            return
+        basins.append(found)
+        catchments.append((np.minimum(found.lo, s), np.maximum(found.hi, s)))
 
     def evaluate(lo, hi, parent):
         nonlocal nodes
