@@ -3,7 +3,7 @@
     python benchmarks/nonconvex.py table [--output docs/nonconvex-benchmark.md]
     OPENBLAS_NUM_THREADS=1 python benchmarks/nonconvex.py fine [--output FILE] [--sizes ...] [--cases ...]
     python benchmarks/nonconvex.py paths [--output docs/nonconvex-paths.png] [--elements 12]
-    OPENBLAS_NUM_THREADS=1 python benchmarks/nonconvex.py modes [--output FILE] [--sizes ...]
+    OPENBLAS_NUM_THREADS=1 python benchmarks/nonconvex.py modes [--output FILE] [--sizes 16,32,64]
     OPENBLAS_NUM_THREADS=1 python benchmarks/nonconvex.py dual [--output FILE] [--sizes ...] [--cases ...]
     OPENBLAS_NUM_THREADS=1 python benchmarks/nonconvex.py grid [--output FILE] [--sizes 100,256]
 
@@ -14,7 +14,9 @@ programs.  ``fine``: the same by the fast path (:mod:`gaocvx.nonconvex.fast`)
 for nonconvex.md's P4 example, the k = 2 P1 example and the P4 obstacle example
 (``--cases``) at 128 to 8192 elements (``--sizes``); ``modes``: four and five
 unstable modes (MODE_CASES) at 8 to 64 elements, with the node programs that
-``solve_global`` picks (the fast path; no second try by the other kind)
+``solve_global`` picks (the fast path; no second try by the other kind), on
+their own and with basins off (``minimum.BASINS``), both in one run, four of them
+free and two on a bonded bed;
 ``dual``: the dual bound (:mod:`gaocvx.nonconvex.dual`) against the branch
 and bound alone on the same scene (CASES without obstacle, ``--cases``; the
 fast path), the two run times measured in one run, their ratio and the
@@ -43,13 +45,16 @@ from gaocvx import DiscreteProblem, Scene
 BEAM = {"length": 1.0, "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1, "width": 1.0}
 
 
-def scene(supports, q=None, axial=0.0, n=16, foundation=None, obstacle=None, points=()):
+def scene(supports, q=None, axial=0.0, n=16, foundation=None, obstacle=None, points=(),
+          bonded=None):
     d = {"beam": {**BEAM, "model": "gao", "supports": supports},
          "load": {"axial": axial, "points": [list(p) for p in points]}, "mesh": {"elements": n}}
     if q is not None:
         d["load"]["q"] = q
     if foundation:
         d["foundation"] = {"gap": foundation[0], "stiffness": foundation[1]}
+    if bonded:
+        d["foundation"] = {"gap": 0.0, "stiffness": bonded, "kind": "bilateral"}
     if obstacle is not None:
         d["obstacle"] = {"gap": obstacle}
     return Scene.from_dict(d)
@@ -70,6 +75,11 @@ CASES = [
 MODE_CASES = [
     ("P1, q = -1e7 N/m, P = 3.5e10 N (k = 4)", dict(supports="P1", q=-1e7, axial=3.5e10)),
     ("P4, q = -1e7 N/m, P = 3.2e10 N (k = 5)", dict(supports="P4", q=-1e7, axial=3.2e10)),
+    # a bonded bed of the thesis's stiffness (P_hat_h = 6.62e9 N for P4, 1.008e10 N for P1)
+    ("P4, bonded bed 1e11 N/m^2, q = -5e7 N/m, P = 1.99e10 N (3 P_hat_h, k = 4)",
+     dict(supports="P4", q=-5e7, axial=1.9861e10, bonded=1e11)),
+    ("P1, bonded bed 1e11 N/m^2, q = -5e7 N/m, P = 5.04e10 N (5 P_hat_h, k = 5)",
+     dict(supports="P1", q=-5e7, axial=5.0385e10, bonded=1e11)),
 ]
 
 
@@ -104,6 +114,32 @@ def table(out, cases=CASES, sizes=(8, 16, 32, 64, 128), fast=False):
             lines.append(f"| {label} | {n} | {g['k']} | {g['nodes']} | {g['time']:.2f} | "
                          f"{g['gap']:.2e} | {g['rel']:.1e} | "
                          f"{'yes' if g['unique'] else 'no'} | {g['status']} |")
+            print(lines[-1], file=sys.stderr, flush=True)
+    _write(lines, out)
+
+
+def modes_table(out, cases, sizes):
+    """Four and five modes: the global method with and without basins (same scenes, one run)."""
+    import gaocvx.nonconvex.minimum as minimum
+
+    def run(s, basins):
+        minimum.BASINS = basins
+        try:
+            return _global(s, None)
+        finally:
+            minimum.BASINS = True
+
+    lines = ["| scene | N | k | nodes | time [s] | gap / scale | status | nodes without basins "
+             "| time without [s] | ratio | \\|ΔE\\| / scale |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for label, kw in cases:
+        for n in sizes:
+            s = scene(n=n, **kw)
+            a, b = run(s, True), run(s, False)
+            lines.append(f"| {label} | {n} | {a['k']} | {a['nodes']} | {a['time']:.2f} | "
+                         f"{a['rel']:.1e} | {a['status']} | {b['nodes']} | {b['time']:.2f} | "
+                         f"{b['time'] / a['time']:.1f} | "
+                         f"{abs(a['energy'] - b['energy']) / a['scale']:.1e} |")
             print(lines[-1], file=sys.stderr, flush=True)
     _write(lines, out)
 
@@ -217,7 +253,7 @@ def main(argv=None):
     ap.add_argument("--elements", type=int, default=12)
     ap.add_argument("--sizes", default=DEFAULT_SIZES,
                     help="fine, modes, dual, grid: the meshes (comma-separated element counts; "
-                         "modes: 8,16,32,64 by default; dual: 16,128,1024,4096; grid: 100,256)")
+                         "modes: 16,32,64 by default; dual: 16,128,1024,4096; grid: 100,256)")
     ap.add_argument("--cases", default="0,2,5",
                     help="fine, dual: indices into CASES (fine's default: P4, P1 with k = 2, P4 "
                          "on an obstacle; dual's: 0,2,3, the scenes without an obstacle)")
@@ -228,8 +264,8 @@ def main(argv=None):
         cases = [CASES[int(i)] for i in args.cases.split(",")]
         table(args.output, cases, tuple(int(n) for n in args.sizes.split(",")), fast=True)
     elif args.what == "modes":
-        sizes = "8,16,32,64" if args.sizes == DEFAULT_SIZES else args.sizes
-        table(args.output, MODE_CASES, tuple(int(n) for n in sizes.split(",")), fast=None)
+        sizes = "16,32,64" if args.sizes == DEFAULT_SIZES else args.sizes
+        modes_table(args.output, MODE_CASES, tuple(int(n) for n in sizes.split(",")))
     elif args.what == "grid":
         sizes = "100,256" if args.sizes == DEFAULT_SIZES else args.sizes
         grid(args.output, tuple(int(n) for n in sizes.split(",")))
