@@ -14,29 +14,37 @@ node program.
 The argument (no obstacle; any foundation):
 
 1. For ``s`` in ``B*`` the slice ``{u : Phi'G u = s}`` has a unique minimiser
-   ``u(s)``: on it the energy is strongly convex, with modulus
-   ``gamma = (lambda_{k+1} - p) / 2`` in the norm ``|d|_G = sqrt(d'G d)`` (the
-   complement's estimated margin, halved, as the modes' check takes it), and
+   ``u(s)``: on it the energy is strongly convex, with modulus ``gamma`` in two
+   norms, ``(lambda_{k+1} - p) / 2`` in ``|d|_G = sqrt(d'G d)`` and
+   ``(1 - p / lambda_{k+1}) / 2`` in the bending norm ``|d|_K`` (the complement's
+   estimated margin, halved, as the modes' check takes it), and
    ``Pi(u) >= Pi(u(s))`` for every ``u`` with those amplitudes.
-2. ``w0 = u* + Phi~ (s - s*)``, ``Phi~ = Phi (Phi'G Phi)^-1``, lies on the slice, so
-   ``|u(s) - w0|_G <= |grad Pi(w0)|_* / gamma``, the dual norm over the slice's
-   directions.  ``grad Pi(w0)`` is the residual ``r``, plus the linear part
-   ``H* Phi~ ds`` (``H*`` the Hessian at ``u*`` without a unilateral bed's
-   uncertain points), whose part along ``G Phi`` the slice does not see, plus the
-   Gao term's remainder ``a/3 B1'W (3 y d^2 + d^3)`` (``d`` the mode slopes'
-   change, ``|d_q| <= D_q``) and a unilateral bed's change at points whose
-   contact the box may switch (``|Delta| <= |N_q Phi~ ds|``).
-3. So every slope of ``u(s)`` lies within ``eta_q = D_q + sqrt(kappa_q) rho_v``
-   of ``u*``'s (``kappa_q = b_q'G^-1 b_q``: ``|b_q'd| <= sqrt(kappa_q) |d|_G``),
-   where the Gao term's curvature is at least ``a (|y_q| - eta_q)_+^2``; with
+2. ``w1 = u* + Z (s - s*)`` lies on the slice, ``Z = Phi~ + V`` with
+   ``Phi~ = Phi (Phi'G Phi)^-1`` and ``V`` the slice's linear response (the
+   quadratic model at ``u*`` minimised over the slice's directions: a
+   bordered solve), so ``|u(s) - w1| <= |grad Pi(w1)|_* / gamma`` in either
+   norm, the dual norm over the slice's directions (any multiple of ``G Phi``
+   may be taken off the gradient: those directions have ``Phi'G d = 0``).
+   ``grad Pi(w1)`` is the residual ``r``, plus what the linear model leaves of
+   ``H* Z ds`` (``H*`` the Hessian at ``u*``; its rounding), plus the Gao
+   term's remainder ``a/3 B1'W (3 y d^2 + d^3)`` (``d`` the slopes' change
+   along ``Z``, ``|d_q| <= D_q = sum_i |b_q'Z_i| rho_i``), plus a unilateral
+   bed's change at points whose contact the box may switch (at most
+   ``2 |n_q'Z ds|`` from the model's).
+3. So every slope of ``u(s)`` lies within ``eta_q = D_q + min over the norms of
+   sqrt(b_q'A^-1 b_q) |u(s) - w1|_A`` of ``u*``'s, where the Gao term's curvature
+   is at least ``a (|y_q| - eta_q)_+^2``; with
    ``H_low = K - p G + a B1' diag(w (|y| - eta)_+^2) B1 >= m G`` proved (a
    Cholesky factorisation and its backward error, :func:`.dual.proved_margin`)
    the energy is ``m``-strongly convex on that set of deflections (a convex
-   set, containing ``u*``), and ``Pi(u(s)) >= Pi(u*) - |r|_*^2 / (2 m)``.
+   set, containing ``u*`` and every ``u(s)``), and
+   ``Pi(u(s)) >= Pi(u*) - |r|_*^2 / (2 m)``.
 
 Every number is computed at ``u*`` once; a box is tried at a scale ``tau`` and
-halved until the proof holds.  Like the node programs it trusts the modes'
-``lambda_{k+1}``; the rest is proved (round-off of the products included).
+halved until the proof holds.  What is not proved: like the node programs it
+trusts the modes' ``lambda_{k+1}``, and the round-off of the quadratic forms in
+``G^-1`` and ``K^-1`` is allowed for from the matrices' condition (``N^2``,
+``N^4``), not enclosed; ``H_low``'s margin is proved.
 
 Examples
 --------
