@@ -118,57 +118,50 @@ def table(out, cases=CASES, sizes=(8, 16, 32, 64, 128), fast=False):
     _write(lines, out)
 
 
-def modes_table(out, cases, sizes):
-    """Four and five modes: the global method with and without basins (same scenes, one run)."""
+def _paired(out, cases, sizes, switch, header, row):
+    """Each scene solved with ``minimum.<switch>`` on and off in one run, a row of each pair.
+
+    ``row(label, n, on, off)`` formats a table row from the two :func:`_global` results.
+    """
     import gaocvx.nonconvex.minimum as minimum
 
-    def run(s, basins):
-        minimum.BASINS = basins
+    def run(s, value):
+        setattr(minimum, switch, value)
         try:
             return _global(s, None)
         finally:
-            minimum.BASINS = True
+            setattr(minimum, switch, True)
 
-    lines = ["| scene | N | k | nodes | time [s] | gap / scale | status | nodes without basins "
-             "| time without [s] | ratio | \\|ΔE\\| / scale |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines = list(header)
     for label, kw in cases:
         for n in sizes:
             s = scene(n=n, **kw)
-            a, b = run(s, True), run(s, False)
-            lines.append(f"| {label} | {n} | {a['k']} | {a['nodes']} | {a['time']:.2f} | "
-                         f"{a['rel']:.1e} | {a['status']} | {b['nodes']} | {b['time']:.2f} | "
-                         f"{b['time'] / a['time']:.1f} | "
-                         f"{abs(a['energy'] - b['energy']) / a['scale']:.1e} |")
+            lines.append(row(label, n, run(s, True), run(s, False)))
             print(lines[-1], file=sys.stderr, flush=True)
     _write(lines, out)
+
+
+def modes_table(out, cases, sizes):
+    """Four and five modes: the global method with and without basins (same scenes, one run)."""
+    header = ["| scene | N | k | nodes | time [s] | gap / scale | status | nodes without basins "
+              "| time without [s] | ratio | \\|ΔE\\| / scale |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
+    _paired(out, cases, sizes, "BASINS", header, lambda label, n, a, b: (
+        f"| {label} | {n} | {a['k']} | {a['nodes']} | {a['time']:.2f} | {a['rel']:.1e} | "
+        f"{a['status']} | {b['nodes']} | {b['time']:.2f} | {b['time'] / a['time']:.1f} | "
+        f"{abs(a['energy'] - b['energy']) / a['scale']:.1e} |"))
 
 
 def dual_table(out, cases, sizes):
     """The global method with and without the dual bound's shortcut (same scenes, one run)."""
-    import gaocvx.nonconvex.minimum as minimum
-
-    def run(s, shortcut):
-        minimum.DUAL_BOUND = shortcut
-        try:
-            return _global(s, None)
-        finally:
-            minimum.DUAL_BOUND = True
-
-    lines = ["| scene | N | k | certificate | time [s] | branch and bound alone [s] | ratio | "
-             "gap / scale | its gap / scale | \\|ΔE\\| / scale | status |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
-    for label, kw in cases:
-        for n in sizes:
-            s = scene(n=n, **kw)
-            a, b = run(s, True), run(s, False)
-            lines.append(f"| {label} | {n} | {a['k']} | {a['certificate']} | "
-                         f"{a['time']:.2f} | {b['time']:.2f} | {b['time'] / a['time']:.1f} | "
-                         f"{a['rel']:.1e} | {b['gap'] / a['scale']:.1e} | "
-                         f"{abs(a['energy'] - b['energy']) / a['scale']:.1e} | "
-                         f"{a['status']} / {b['status']} |")
-            print(lines[-1], file=sys.stderr, flush=True)
-    _write(lines, out)
+    header = ["| scene | N | k | certificate | time [s] | branch and bound alone [s] | ratio | "
+              "gap / scale | its gap / scale | \\|ΔE\\| / scale | status |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
+    _paired(out, cases, sizes, "DUAL_BOUND", header, lambda label, n, a, b: (
+        f"| {label} | {n} | {a['k']} | {a['certificate']} | {a['time']:.2f} | "
+        f"{b['time']:.2f} | {b['time'] / a['time']:.1f} | {a['rel']:.1e} | "
+        f"{b['gap'] / a['scale']:.1e} | {abs(a['energy'] - b['energy']) / a['scale']:.1e} | "
+        f"{a['status']} / {b['status']} |"))
 
 
 def paths(out, n):
