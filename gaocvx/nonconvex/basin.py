@@ -41,10 +41,13 @@ The argument (no obstacle; any foundation):
    ``Pi(u(s)) >= Pi(u*) - |r|_*^2 / (2 m)``.
 
 Every number is computed at ``u*`` once; a box is tried at a scale ``tau`` and
-halved until the proof holds.  What is not proved: like the node programs it
-trusts the modes' ``lambda_{k+1}``, and the round-off of the quadratic forms in
-``G^-1`` and ``K^-1`` is allowed for from the matrices' condition (``N^2``,
-``N^4``), not enclosed; ``H_low``'s margin is proved.
+halved until the proof holds.  The residual and ``H* Z`` are evaluated in
+extended precision with a bound of their rounding (in double precision the
+residual of a minimiser's DOFs is as large as its rounding on fine meshes).
+What is not proved: like the node programs it trusts the modes'
+``lambda_{k+1}``, and the round-off of the quadratic forms in ``G^-1`` and
+``K^-1`` is allowed for from the matrices' condition (``(L/h_min)^2``,
+``(L/h_min)^4``), not enclosed; ``H_low``'s margin is proved.
 
 Examples
 --------
@@ -121,18 +124,32 @@ class _Metric:
     """The norm ``|d|_A = sqrt(d'A d)``: dual norms and the bounds ``|b'd| <= sqrt(b'A^-1 b) |d|_A``.
 
     The quadratic forms in ``A^-1`` come from a banded Cholesky factor; their
-    round-off, at most about ``cond(A) n eps`` relative (``cond ~ N^power`` for the
-    beam's matrices: 2 for G, 4 for the bending matrix), is added.
+    round-off, at most about ``cond(A) n eps`` relative, is added, with
+    ``cond ~ (L / h_min)^power`` for the beam's matrices (2 for G, 4 for the
+    bending matrix; the shortest element rules where point forces grade the mesh).
+    ``floor`` is a proved lower bound of the smallest eigenvalue of ``S A S``
+    (``S = diag(A)^-1/2``), by which :meth:`bound` bounds the dual norm of every
+    vector within given magnitudes.
     """
 
-    def __init__(self, A, n_el: int, power: int):
+    def __init__(self, A, xi, power: int):
         self.chol = BandedCholesky(A)
-        self.factor = 1.0 + 1e3 * float(n_el + 1) ** power * EPS
+        self.factor = 1.0 + 1e3 * (1.0 / float(np.min(np.diff(xi)))) ** power * EPS
+        self.S = sp.diags(1.0 / np.sqrt(A.diagonal()))
+        self.floor = metric_floor(A, self.S)
 
     def dual(self, g) -> float:
         """``sqrt(g'A^-1 g)``, rounded up."""
         g = np.asarray(g, float)
         return math.sqrt(max(float(g @ self.chol.solve(g)), 0.0) * self.factor)
+
+    def bound(self, magnitudes) -> float:
+        """A proved bound of ``sqrt(e'A^-1 e)`` over every ``|e| <= magnitudes``
+        (``e'A^-1 e <= |S e|^2 / floor``); infinite without a floor."""
+        if not self.floor > 0:
+            return math.inf
+        return float(np.linalg.norm(self.S @ np.asarray(magnitudes, float))) / math.sqrt(
+            self.floor) * (1.0 + 1e-12)
 
     def points(self, rows) -> np.ndarray:
         """``sqrt(b_q'A^-1 b_q)`` for the rows ``b_q`` of a sparse matrix, rounded up."""
@@ -169,33 +186,29 @@ class _Proof:
         if self.unilateral:
             self.depth = dp.g - dp.Nq @ u
             self.cw = np.broadcast_to(dp.c * dp.wq_c, dp.wq_c.shape)
-        H, Habs = self._hessian(K)
+        H = self._hessian(K)
         # The slice minimiser's first-order response to the amplitudes: u* + Z ds with
         # Z = Phi~ + V, V the minimiser over the slice's directions of the quadratic model.
         Z = Phit + self._response(H, Phit)
         self.slopes = np.abs(dp.B1 @ Z)                         # |b_q' Z_i|
         if self.unilateral:
             self.values = np.abs(dp.Nq @ Z)                     # |n_q' Z_i|
-        self.linear = self._coupling(H, Habs, Z)
-        r = dp.gradient(u)
-        self.r_norm = [m.dual(r) for m in self.metrics]
+        self.linear = self._coupling(Z)
+        r, r_mag = _residual(dp, u)
+        # (the computed residual, and a bound of its rounding: same size at fine meshes)
+        self.r_norm = [m.dual(r) + m.bound(r_mag) for m in self.metrics]
         self.energy = dp.energy(u)
         parts = sum(abs(v) for v in dp.energy_parts(u).values())
         # (the energy's round-off, as the dual bound allows for it)
         self.allowance = 10.0 * (dp.n_nodes + 10) * EPS * (parts + abs(self.energy))
 
     def _hessian(self, K):
-        """``H*``, the energy's Hessian at ``u*`` (a unilateral bed where it presses), and
-        the same sums of magnitudes (for the round-off of products with it)."""
+        """``H*``, the energy's Hessian at ``u*`` (a unilateral bed where it presses)."""
         dp = self.dp
-        gao = dp.a * dp.wq_gao * self.y**2
-        H = K - dp.p * dp.G + dp.B1T @ sp.diags(gao) @ dp.B1
-        Habs = abs(K) + dp.p * abs(dp.G) + abs(dp.B1T) @ sp.diags(gao) @ abs(dp.B1)
+        H = K - dp.p * dp.G + dp.B1T @ sp.diags(dp.a * dp.wq_gao * self.y**2) @ dp.B1
         if self.unilateral:
-            wa = self.cw * (self.depth > 0)
-            H = H + dp.NqT @ sp.diags(wa) @ dp.Nq
-            Habs = Habs + abs(dp.NqT) @ sp.diags(wa) @ abs(dp.Nq)
-        return H.tocsr(), Habs.tocsr()
+            H = H + dp.NqT @ sp.diags(self.cw * (self.depth > 0)) @ dp.Nq
+        return H.tocsr()
 
     def _response(self, H, Phit) -> np.ndarray:
         """``V``: ``Phi'G V = 0`` and ``H (Phit + V)`` along ``G Phi`` only (bordered solve)."""
@@ -207,18 +220,34 @@ class _Proof:
         # exactly on the slices (to round-off): the part along Phi~ removed
         return V - Phit @ (self.modes.phi.T @ (self.dp.G @ V))
 
-    def _coupling(self, H, Habs, Z) -> list:
+    def _coupling(self, Z) -> list:
         """Per metric, the dual norms over the slice of the columns of ``H* Z`` (their part
-        along ``G Phi`` removed), each plus its round-off: what the linear model leaves."""
-        Phi = self.modes.phi
-        X = H @ Z
-        GPhi = self.dp.G @ Phi
-        beta = np.linalg.solve(self.Pm, Phi.T @ X)
-        J = X - GPhi @ beta
-        # (products of a few dozen terms per entry, each rounded, and the projection's)
-        err = (Habs @ np.abs(Z)) * (40.0 * EPS) + np.abs(GPhi) @ np.abs(beta) * (
-            4.0 * (self.modes.k + 2) * EPS)
-        return [np.array([m.dual(J[:, i]) + m.dual(err[:, i]) for i in range(J.shape[1])])
+        along ``G Phi`` removed), each plus its round-off: what the linear model leaves.
+
+        ``H* Z`` from curvatures, slopes and contact values in extended precision, as
+        :func:`_residual` (the assembled ``H*`` rounds its entries of size ``N^3``, and
+        the rounding bound of a product with it grew to 0.07 at 1024 elements).
+        """
+        dp, ld = self.dp, np.longdouble
+        Phi, Zl, aZ = self.modes.phi, np.asarray(Z, ld), np.abs(Z)
+        w2, w5 = dp.wq2[:, None], dp.wq_gao[:, None]
+        X = dp.B2.T @ (w2 * (dp.B2 @ Zl)) + dp.B1T @ (
+            w5 * (ld(dp.a) * np.asarray(self.y, ld)[:, None] ** 2 - ld(dp.p)) * (dp.B1 @ Zl))
+        mag = abs(dp.B2.T) @ (w2 * (abs(dp.B2) @ aZ)) + abs(dp.B1T) @ (
+            w5 * (dp.a * self.y[:, None] ** 2 + abs(dp.p)) * (abs(dp.B1) @ aZ))
+        if dp.contact == "foundation":
+            cw = np.broadcast_to(dp.c * dp.wq_c, dp.wq_c.shape)
+            act = np.ones(len(cw)) if dp.bilateral else (self.depth > 0).astype(float)
+            X = X + dp.NqT @ ((cw * act)[:, None] * (dp.Nq @ Zl))
+            mag = mag + abs(dp.NqT) @ ((cw * act)[:, None] * (abs(dp.Nq) @ aZ))
+        GPhi = dp.G @ np.asarray(Phi, ld)
+        beta = np.linalg.solve(self.Pm, Phi.T @ np.asarray(X, float))
+        J = np.asarray(X - GPhi @ np.asarray(beta, ld), float)
+        # (a few dozen roundings in extended precision of every term's magnitude, and
+        # J's own conversion to double)
+        err = 40.0 * float(np.finfo(ld).eps) * (mag + abs(dp.G) @ (np.abs(Phi) @ np.abs(
+            beta))) + EPS * np.abs(J)
+        return [np.array([m.dual(J[:, i]) + m.bound(err[:, i]) for i in range(J.shape[1])])
                 for m in self.metrics]
 
     def _bed(self, E):
@@ -263,6 +292,37 @@ class _Proof:
         return margin, lower, eta
 
 
+def _residual(dp, u):
+    """The energy's gradient at ``u``, and a bound of its rounding at every entry.
+
+    From curvatures and slopes, as the energy is evaluated, and in extended
+    precision (``numpy.longdouble``): in double precision the rounding of the
+    gradient of a minimiser's DOFs is as large as the gradient itself on fine
+    meshes (terms of size ``N^3`` cancel), and it enters the basin's bound
+    squared.  The bound is a few dozen roundings of the terms' magnitudes in
+    that precision (the matrices' entries are the energy's own, exact as stored).
+    """
+    ld = np.longdouble
+    x = np.asarray(u, ld)
+    au = np.abs(np.asarray(u, float))
+    kappa, y = dp.B2 @ x, dp.B1 @ x
+    w5 = dp.wq_gao
+    r = dp.B2.T @ (dp.wq2 * kappa) - dp.f
+    mag = abs(dp.B2.T) @ (dp.wq2 * (abs(dp.B2) @ au)) + np.abs(dp.f)
+    if dp.p or dp.a:
+        r = r + dp.B1T @ (w5 * y * (ld(dp.a) / 3 * y * y - ld(dp.p)))
+        ay = abs(dp.B1) @ au
+        mag = mag + abs(dp.B1T) @ (w5 * ay * (dp.a / 3.0 * ay * ay + abs(dp.p)))
+    if dp.contact == "foundation":
+        cw = np.broadcast_to(dp.c * dp.wq_c, dp.wq_c.shape)
+        pen = dp.penetration(dp.g - dp.Nq @ x)
+        r = r - dp.NqT @ (cw * pen)
+        mag = mag + abs(dp.NqT) @ (cw * (np.abs(dp.g) + abs(dp.Nq) @ au))
+    # (its conversion to double adds one rounding of r itself)
+    r64 = np.asarray(r, float)
+    return r64, 40.0 * float(np.finfo(ld).eps) * mag + EPS * np.abs(r64)
+
+
 class BasinProver:
     """Basins of one problem (what does not depend on the minimiser is computed once).
 
@@ -282,9 +342,9 @@ class BasinProver:
 
     def _prepare(self):
         """The two metrics and the slopes' bounds in them (``O(N^2)``: once per problem)."""
-        dp, n_el = self.dp, self.dp.n_nodes - 1
+        dp = self.dp
         self.K = effective_stiffness(self.dp)
-        self.metrics = (_Metric(dp.G, n_el, 2), _Metric(self.K, n_el, 4))
+        self.metrics = (_Metric(dp.G, dp.xi, 2), _Metric(self.K, dp.xi, 4))
         self.kappa = [m.points(dp.B1) for m in self.metrics]
         lam_next = float(self.modes.lam_next)
         # strong convexity on the slices: K - p G >= (lambda_{k+1} - p) G and
@@ -292,8 +352,7 @@ class BasinProver:
         # modes' margin takes it (lambda_{k+1} is an estimate)
         self.gamma = ((0.5 * (lam_next - dp.p), 0.5 * (1.0 - dp.p / lam_next))
                       if math.isfinite(lam_next) else (math.inf, math.inf))
-        self.S = sp.diags(1.0 / np.sqrt(dp.G.diagonal()))
-        self.floor = metric_floor(dp.G, self.S)
+        self.S, self.floor = self.metrics[0].S, self.metrics[0].floor
         self._ready = True
 
     def prove(self, u, scale: float | None = None) -> Basin | None:
@@ -346,7 +405,13 @@ class BasinProver:
                 else:
                     lo_tau, good = mid, (mid, out)
         tau, (margin, lower, eta) = good
+        # The dense node programs' amplitudes are (Phi'G Phi)^-1 Phi'G u, these Phi'G u:
+        # the box is narrowed by what the two may differ by (~1e-10 of them).
         rho = tau * shape
+        rho = rho - (float(np.max(np.abs(proof.Pm - np.eye(len(rho))).sum(axis=1))) + 1e-12) * (
+            float(np.max(np.abs(proof.s))) + float(np.max(rho)))
+        if not np.all(rho > 0):
+            return None
         log.info("basin: box of half-widths %s proved around s = %s (margin %.3g)",
                  np.array2string(rho, precision=3), np.array2string(proof.s, precision=4),
                  margin)

@@ -157,32 +157,33 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
     counter = itertools.count()
     nodes = 0
 
-    # basins[i] with the box of the points that polished to it (not tried again)
+    # Proved basins, and boxes around the points that polished to a minimiser already
+    # tried (its basin, used or not, and those points: they are not tried again).
     basins, catchments, tries = [], [], [0]
 
     def try_basin(u, s, lam):
         """A proved basin around the local minimiser that ``(u, s)`` polishes to."""
+        inside = lambda x, box: bool(np.all(box[0] <= x) and np.all(x <= box[1]))  # noqa: E731
         if basin is None or u is None or s is None or tries[0] >= MAX_BASINS:
             return
-        if any(np.all(lo <= s) and np.all(s <= hi) for lo, hi in catchments):
+        if any(inside(s, box) for box in catchments):
             return
         tries[0] += 1
         found = basin(u, s, lam)
         if found is None:
             return
-        for i, b in enumerate(basins):
-            if b.contains(found.s, found.s):   # a known minimiser again
-                catchments[i] = (np.minimum(catchments[i][0], s), np.maximum(catchments[i][1], s))
+        for i, box in enumerate(catchments):
+            if inside(found.s, box):   # a known minimiser again
+                catchments[i] = (np.minimum(box[0], s), np.maximum(box[1], s))
                 return
+        catchments.append((np.minimum(found.lo, s), np.maximum(found.hi, s)))
         e = energy(found.u)
         if e < best[0]:
             best[:] = [e, found.u, found.s, None]
-        if not found.lower > best[0] - tol:
-            # (a bound that does not close its boxes would only have them split
-            # again and again: a polish that stopped short, r'G^-1 r / 2m too large)
-            return
-        basins.append(found)
-        catchments.append((np.minimum(found.lo, s), np.maximum(found.hi, s)))
+        # (a bound that does not close its boxes would only have them split again and
+        # again: r'G^-1 r / 2m too large, the residual's rounding at fine meshes)
+        if found.lower > best[0] - tol:
+            basins.append(found)
 
     def evaluate(lo, hi, parent):
         nonlocal nodes
