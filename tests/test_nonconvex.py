@@ -8,6 +8,7 @@ amplitude of nonconvex.md.
 """
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -247,6 +248,20 @@ def test_more_than_six_unstable_modes_are_refused_with_the_count():
     assert k == 7      # lambda_n ~ n^2 lambda_1: 49 < 56 < 64
     with pytest.raises(SceneError, match=f"with {k} unstable buckling modes.*at most 6"):
         solve(scene, "global")
+
+
+def test_a_bonded_bed_refused_for_its_modes_names_its_own_limit():
+    """A bonded bed raises the convexity limit to P_hat_h; far above it (here 4.5 P_hat_h
+    on a bed of 1e12 N/m^2: the bed crowds eight modes below P) the refusal names that
+    limit, not the bare beam's P_bar_h (a campaign's scene 81:4 did)."""
+    data = scene_dict("P4", q=-5e7, elements=12)
+    data["foundation"] = {"gap": 0.0, "stiffness": 1e12, "kind": "bilateral"}
+    p_hat = DiscreteProblem(Scene.from_dict(data)).P_hat_h
+    data["load"]["axial"] = 4.5 * p_hat
+    limit = re.escape(f"P_hat_h = {p_hat:.4g} N")
+    with pytest.raises(SceneError, match=f"bonded beam's convexity limit {limit}.*"
+                       "unstable buckling modes.*at most 6"):
+        solve(Scene.from_dict(data), "global")
 
 
 def test_nonconvex_md_example_cost():

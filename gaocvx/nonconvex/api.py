@@ -55,8 +55,12 @@ def above_limit(scene, elements=None) -> bool:
 
 
 def _statement(dp) -> str:
-    """What the convex methods say of a P at or above the limit (gaocvx.limit's words)."""
+    """What the convex methods say of a P at or above the limit (gaocvx.limit's words;
+    a bonded bed's limit is P_hat_h, which the bed raises)."""
     beam = dp.scene.beam
+    if getattr(dp, "bilateral", False):
+        return (f"P = {dp.P:.4g} N is not below the bonded beam's convexity limit "
+                f"P_hat_h = {dp.P_hat_h:.4g} N for {beam.supports}")
     return (f"P = {dp.P:.4g} N is not below the convexity limit P_bar_h = {dp.P_bar_h:.4g} N "
             f"for {beam.supports} (continuum P_bar = {beam.P_bar():.4g} N)")
 
