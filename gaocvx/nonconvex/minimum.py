@@ -51,8 +51,8 @@ from ..errors import SceneError
 from ..mixed import MixedForm
 from ..newton import answer, certify, passes
 from . import bnb, dual
-from .basin import BasinProver
 from .alternatives import other_minimisers
+from .basin import BasinProver
 from .bnb import branch_and_bound
 from .bounds import amplitude_box, check_bounded, load_constant
 from .certificate import certify_contact
