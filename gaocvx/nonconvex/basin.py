@@ -78,7 +78,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..linalg import BandedCholesky, NotPositiveDefinite
-from .dual import EPS, _smallest, metric_floor, proved_margin, tangent_matrix
+from .dual import EPS, _smallest, proved_margin, tangent_matrix
+from .metric import Metric
 from .node import effective_stiffness
 
 __all__ = ["Basin", "BasinProver", "basin"]
@@ -92,8 +93,6 @@ REFINE = 4
 # The box's half-widths are proportional to 1/sqrt(c_i) (as the branch and bound's
 # boxes: equal chord errors), at most this many times the narrowest.
 SHAPE_CAP = 8.0
-# Columns of G^-1 B1' computed at a time (for kappa_q).
-CHUNK = 512
 
 
 @dataclass(frozen=True)
@@ -118,47 +117,6 @@ class Basin:
     def contains(self, lo, hi) -> bool:
         """Whether the box ``[lo, hi]`` lies inside this one."""
         return bool(np.all(self.lo <= lo) and np.all(hi <= self.hi))
-
-
-class _Metric:
-    """The norm ``|d|_A = sqrt(d'A d)``: dual norms and the bounds ``|b'd| <= sqrt(b'A^-1 b) |d|_A``.
-
-    The quadratic forms in ``A^-1`` come from a banded Cholesky factor; their
-    round-off, at most about ``cond(A) n eps`` relative, is added, with
-    ``cond ~ (L / h_min)^power`` for the beam's matrices (2 for G, 4 for the
-    bending matrix; the shortest element rules where point forces grade the mesh).
-    ``floor`` is a proved lower bound of the smallest eigenvalue of ``S A S``
-    (``S = diag(A)^-1/2``), by which :meth:`bound` bounds the dual norm of every
-    vector within given magnitudes.
-    """
-
-    def __init__(self, A, xi, power: int):
-        self.chol = BandedCholesky(A)
-        self.factor = 1.0 + 1e3 * (1.0 / float(np.min(np.diff(xi)))) ** power * EPS
-        self.S = sp.diags(1.0 / np.sqrt(A.diagonal()))
-        self.floor = metric_floor(A, self.S)
-
-    def dual(self, g) -> float:
-        """``sqrt(g'A^-1 g)``, rounded up."""
-        g = np.asarray(g, float)
-        return math.sqrt(max(float(g @ self.chol.solve(g)), 0.0) * self.factor)
-
-    def bound(self, magnitudes) -> float:
-        """A proved bound of ``sqrt(e'A^-1 e)`` over every ``|e| <= magnitudes``
-        (``e'A^-1 e <= |S e|^2 / floor``); infinite without a floor."""
-        if not self.floor > 0:
-            return math.inf
-        return float(np.linalg.norm(self.S @ np.asarray(magnitudes, float))) / math.sqrt(
-            self.floor) * (1.0 + 1e-12)
-
-    def points(self, rows) -> np.ndarray:
-        """``sqrt(b_q'A^-1 b_q)`` for the rows ``b_q`` of a sparse matrix, rounded up."""
-        out = np.empty(rows.shape[0])
-        cols = rows.T.tocsc()
-        for a in range(0, rows.shape[0], CHUNK):
-            block = cols[:, a:a + CHUNK].toarray()
-            out[a:a + CHUNK] = np.einsum("ij,ij->j", block, self.chol.solve(block))
-        return np.sqrt(np.maximum(out, 0.0) * self.factor)
 
 
 class _Proof:
@@ -344,7 +302,7 @@ class BasinProver:
         """The two metrics and the slopes' bounds in them (``O(N^2)``: once per problem)."""
         dp = self.dp
         self.K = effective_stiffness(self.dp)
-        self.metrics = (_Metric(dp.G, dp.xi, 2), _Metric(self.K, dp.xi, 4))
+        self.metrics = (Metric(dp.G, dp.xi, 2), Metric(self.K, dp.xi, 4))
         self.kappa = [m.points(dp.B1) for m in self.metrics]
         lam_next = float(self.modes.lam_next)
         # strong convexity on the slices: K - p G >= (lambda_{k+1} - p) G and
