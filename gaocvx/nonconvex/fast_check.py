@@ -33,8 +33,11 @@ True
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
+import os
+import sys
 
 import numpy as np
 import scipy.optimize as so
@@ -55,6 +58,49 @@ RANGE_PAD = 1e-6
 POLISH_BUDGET = 12
 
 
+# The linear programs of amplitude_range: HiGHS's methods, the first also without presolve.
+LP_ATTEMPTS = (("highs", {}), ("highs", {"presolve": False}), ("highs-ds", {}),
+               ("highs-ipm", {}))
+
+
+@contextlib.contextmanager
+def _quiet_stdout():
+    """The process's standard output (file descriptor 1) sent to /dev/null.
+
+    HiGHS prints some failures there itself ("Highs::returnFromOptimizeModel:
+    ... Solve error"), where ``gaocvx solve --json`` writes its JSON: a hidden-scene
+    trial's JSON did not parse.  The failure is logged by the caller instead.
+    The descriptor itself, whatever ``sys.stdout`` is (HiGHS writes to the C
+    library's stdout); where it cannot be duplicated, nothing is redirected.
+    """
+    try:
+        sys.stdout.flush()
+    except (AttributeError, ValueError, OSError):
+        pass
+    try:
+        saved = os.dup(1)
+    except OSError:
+        yield
+        return
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 1)
+            yield
+            _flush_c_stdio()   # (what HiGHS left in the C library's buffer goes there too)
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+def _flush_c_stdio() -> None:
+    """``fflush(NULL)`` of the C library, where ctypes can reach it."""
+    try:
+        import ctypes
+        ctypes.CDLL(None).fflush(None)
+    except (OSError, AttributeError, TypeError):
+        pass
+
+
 def amplitude_range(prog):
     """Each amplitude's range ``(lo, hi)`` over the admissible set (LP), widened by RANGE_PAD.
 
@@ -73,9 +119,13 @@ def amplitude_range(prog):
         # with the rows of B as they are, ~2e-3)
         direction = prog.B[i] / max(float(np.max(np.abs(prog.B[i]))), 1e-300)
         for sign in (1.0, -1.0):
-            for method in ("highs", "highs-ds", "highs-ipm"):
-                res = so.linprog(sign * direction, A_ub=-mf.A, b_ub=gap0, A_eq=mf.C,
-                                 b_eq=-link0, bounds=(None, None), method=method)
+            # (HiGHS's presolve failed, "Solve error", on a P1 beam's third mode with an
+            # obstacle below, where the LP is unbounded; without presolve it says so)
+            for method, options in LP_ATTEMPTS:
+                with _quiet_stdout():
+                    res = so.linprog(sign * direction, A_ub=-mf.A, b_ub=gap0, A_eq=mf.C,
+                                     b_eq=-link0, bounds=(None, None), method=method,
+                                     options=options)
                 if res.status in (0, 3):
                     break
             if res.status == 0:
