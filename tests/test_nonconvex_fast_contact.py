@@ -209,3 +209,40 @@ def test_certified_energies_converge_with_the_mesh(kw):
     d = np.abs(np.diff(energies))
     order = -np.polyfit(np.arange(len(d)), np.log2(d), 1)[0]
     assert order >= 3.5, (energies, order)
+
+
+def test_json_output_stays_json_when_highs_fails_in_presolve(capfd, tmp_path):
+    """A hidden-scene trial's P1 beam on an obstacle with three modes: HiGHS's presolve
+    failed ("Solve error") on the amplitude range of the third mode, an unbounded LP,
+    and HiGHS printed the failure to the process's standard output, ahead of the JSON
+    of ``gaocvx solve --json``, which then did not parse.  Standard output is kept for
+    the JSON (captured at the file descriptor: HiGHS writes there, not to sys.stdout),
+    and the LP is solved again without presolve: unbounded, as it is."""
+    import json
+
+    from gaocvx.cli import main
+    path = tmp_path / "g1_12.toml"
+    path.write_text('[beam]\nmodel = "gao"\nsupports = "P1"\nlength = 1.0\nE = 2.1e11\n'
+                    'nu = 0.3\nhalf_thickness = 0.1\nwidth = 1.0\n[load]\n'
+                    'points = [[0.4119, 2387334.941152279], [0.0659, -3798873.95063084]]\n'
+                    'axial = 23667681669.613983\n[obstacle]\ngap = 0.019431968268937762\n'
+                    '[mesh]\nelements = 16\n')
+    code = main(["solve", str(path), "--json"])
+    out, err = capfd.readouterr()
+    data = json.loads(out)
+    assert code == 0 and data["status"] == "optimal" and data["global"]["unstable_modes"] == 3
+    assert "Highs" not in out + err and "linprog status" not in err
+
+
+def test_three_modes_on_an_obstacle_take_the_fast_path_on_coarse_meshes():
+    """A hidden-scene trial's P4 beam on an obstacle 1 mm below at 15 P_bar_h (k = 3,
+    24 elements): the dense programs ran to their 4000 nodes (46 s); the fast path,
+    now the default from three modes, certifies it in a few hundred.  The
+    independent checker of the campaign confirms the answer."""
+    from campaign import Case
+    from nonconvex_campaign_support import run_case
+    data = _data("P4", q=-1e7, axial=17520014950.425335, gap=0.001, elements=24)
+    rec = run_case(Case(data, ("P4", "obstacle")), starts=6)
+    assert not rec["violations"], rec["violations"]
+    assert rec["status"] == "optimal" and rec["k"] == 3, rec.get("message")
+    assert rec["nodes"] < 1000, rec["nodes"]
