@@ -130,7 +130,7 @@ def convex_breakdown(n=2048):
     import cvxpy as cp
     from gaocvx.convex import CLARABEL_LADDER, ConvexProgram, _explicit
     from gaocvx.mixed import MixedForm
-    from gaocvx.newton import certify
+    from gaocvx.certificate import certify
     base = sparse_solve_time(n, repeat=15)
     dp = DiscreteProblem(scene(GAO_FOUNDATION, n))
     settings = _explicit(CLARABEL_LADDER["smooth"])[0]

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from gaocvx import DiscreteProblem, Scene, SolverError, solve
-from gaocvx.discrete import ZERO_ANSWER
+from gaocvx.tolerances import ZERO_ANSWER
 
 BEAM = {"length": 1.0, "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1, "width": 1.0}
 

@@ -28,7 +28,7 @@ scale) is tried at the largest penalty first.  Under 8 elements the
 continuation itself solves the scene, as before.
 
 Every multiplier update at the largest penalty is judged by the certificate
-(:func:`gaocvx.newton.certify`'s measures); the first iterate within the
+(:func:`gaocvx.certificate.certify`'s measures); the first iterate within the
 stopping margins is the answer.  If none is within FAST_BUDGET
 factorisations, or progress stalls, the continuation runs from the original
 start (:func:`continuation`), as before; the message says so.
@@ -52,6 +52,7 @@ import math
 import numpy as np
 
 from . import fem
+from .certificate import _obstacle_measures, _stationarity, certify, passes, penalty_range, shortfall
 from .discrete import DiscreteProblem
 from .mixed import MixedForm
 
@@ -128,8 +129,7 @@ def solve_obstacle(mf: MixedForm, z, lam, tol: float, max_iter: int, start_only:
     dual sign and complementarity, without the stationarity's two
     factorisations (residual None) and without the continuation.
     """
-    from .newton import _penalty
-    _, rho_max = _penalty(mf)
+    _, rho_max = penalty_range(mf)
     start = (z, lam)
     coarse, note = 0, ""
     n_c = coarse_elements(mf.dp.n_nodes - 1)
@@ -185,8 +185,7 @@ def polish(mf: MixedForm, z, lam, budget: int = POLISH_BUDGET):
         constraints and its certificate, if it passes within ``budget``
         factorisations; else None.
     """
-    from .newton import _penalty, certify, passes
-    _, rho = _penalty(mf)
+    _, rho = penalty_range(mf)
     z, lam, nf, _, residual = _iterate(mf, z, lam, rho, rho, budget)
     if residual is None:
         return None
@@ -243,7 +242,7 @@ def _iterate(mf: MixedForm, z, lam, rho, rho_max, budget, start_only=False):
         z = mf.on_manifold(z)  # the certified function is the one reported
         gap = mf.gap(z)
         H = mf.hessian(z)
-        residual = nw._obstacle_measures(mf, z, lam, gap, H)
+        residual = _obstacle_measures(mf, z, lam, gap, H)
         cheap = _merit(residual)
         log.log(logging.DEBUG if start_only else logging.INFO,
                 "newton: multiplier update at step %d (penalty %.1e, %d factorisations): "
@@ -251,11 +250,11 @@ def _iterate(mf: MixedForm, z, lam, rho, rho_max, budget, start_only=False):
         if cheap <= 1.0 and start_only:
             return z, lam, total, steps, None
         if cheap <= 10.0:  # the stationarity too (two more factorisations)
-            residual = {"stationarity": nw._stationarity(mf, z, lam, H), **residual}
+            residual = {"stationarity": _stationarity(mf, z, lam, H), **residual}
             merit = _merit(residual)
             if merit <= 1.0:
                 return z, lam, total, steps, residual
-            if nw.passes(residual) and (best is None or merit < best[0]):
+            if passes(residual) and (best is None or merit < best[0]):
                 best = (merit, z, lam, residual)
         # Progress is a halving of the measures; none for STALL updates is round-off.
         stalled = 0 if cheap < 0.5 * best_cheap else stalled + 1
@@ -269,7 +268,6 @@ def _iterate(mf: MixedForm, z, lam, rho, rho_max, budget, start_only=False):
 
 def _merit(residual: dict) -> float:
     """The largest measure of ``residual`` over its stopping margin (<= 1: done)."""
-    from .newton import shortfall
     return shortfall(residual, MARGIN)
 
 
@@ -280,7 +278,7 @@ def continuation(mf: MixedForm, z, lam, tol, max_iter):
     best seen by the certificate.
     """
     from . import newton as nw
-    rho, rho_max = nw._penalty(mf)
+    rho, rho_max = penalty_range(mf)
     total = 0
     previous = math.inf
     best, stalled = None, 0
@@ -297,12 +295,12 @@ def continuation(mf: MixedForm, z, lam, tol, max_iter):
         # stationarity on flat contact, so the best iterate seen is the answer.
         # The others skip the stationarity (one more factorisation).
         H = mf.hessian(z)
-        residual = nw._obstacle_measures(mf, z, lam, gap, H)
+        residual = _obstacle_measures(mf, z, lam, gap, H)
         last = (z, lam, f"{note}; {outer} multiplier updates")
         merit = math.inf
-        if nw.passes({"stationarity": 0.0, **residual}):
-            residual = {"stationarity": nw._stationarity(mf, z, lam, H), **residual}
-            merit = nw.shortfall(residual, nw.MARGIN)
+        if passes({"stationarity": 0.0, **residual}):
+            residual = {"stationarity": _stationarity(mf, z, lam, H), **residual}
+            merit = shortfall(residual, nw.MARGIN)
             if best is None or merit < best[0]:
                 # Progress is a halving of the merit: on a long flat contact the
                 # multipliers converge by a few per cent per update at the largest

@@ -28,7 +28,7 @@ from .convex_program import program as make_program
 from .discrete import DiscreteProblem
 from .errors import SceneError, SolverError
 from .mixed import MixedForm
-from .newton import answer, certify, passes, shortfall
+from .certificate import answer, certify, passes, shortfall
 
 __all__ = ["solve_convex", "ConvexProgram", "clear_programs", "log_outcome"]
 

@@ -5,7 +5,8 @@ the free degrees of freedom, in units where the beam has unit length and unit
 bending stiffness and the deflection is measured in a scale ``W`` of the
 answer's size: the mesh, the scaling, the coefficients (p, a, c, g), the load
 vector and the convexity limit P_bar_h.  The energy, gradient and Hessian in
-Hermite DOFs here serve CVM and the scoring of results; the ground-truth
+Hermite DOFs (:class:`~gaocvx.hermite.HermiteEnergy`, a part of this class)
+serve CVM and the scoring of results; the ground-truth
 solvers (convex, Newton) work on the same energy in the better-conditioned
 variables of :class:`~gaocvx.mixed.MixedForm`, built from this object.
 
@@ -32,60 +33,20 @@ from __future__ import annotations
 
 import copy
 import functools
-import math
 
 import numpy as np
 import scipy.sparse as sp
 
 from . import fem
 from .errors import SceneError
-from .linalg import BandedCholesky, NotPositiveDefinite
+from .hermite import CONTACT_POINTS, HermiteEnergy
+from .linalg import BandedCholesky
 from .scene import Scene
 
-__all__ = ["DiscreteProblem", "GAO_POINTS", "CONTACT_POINTS", "STATIONARITY_TOL", "FEASIBILITY_TOL",
-           "COMPLEMENTARITY_TOL", "ZERO_ANSWER"]
-
-GAO_POINTS = 5       # exact for the degree-8 integrand (w')^4
-CONTACT_POINTS = 5   # Gauss points of the foundation term (and obstacle constraints)
-
-# A solve is "optimal" only when its relative energy-norm residual (see
-# DiscreteProblem.residual) is below this, whichever method produced it ...
-STATIONARITY_TOL = 1e-6
-# ... and, for an obstacle, feasibility and dual sign below this ...
-FEASIBILITY_TOL = 1e-7
-# ... and complementarity below this: it is an energy, whose square root bounds the
-# error in the energy norm, so it must be below the square of STATIONARITY_TOL.
-COMPLEMENTARITY_TOL = STATIONARITY_TOL**2
-# In complementarity, a point closer to the obstacle than this (relative to the
-# answer's own size, its largest |w|) is touching it: a beam lying flat on the
-# obstacle sits at gaps of +-1e-11 of that from round-off alone, which would
-# otherwise dominate the bound.
-TOUCH_TOL = 1e-9
-# An answer smaller than this fraction of the unsupported linear answer is measured
-# against this floor instead of itself (only a beam pressed onto an obstacle has
-# one): the forces acting (load and reaction) are those of the unsupported answer,
-# and their round-off alone is ~1e-15 of it, so relative measures of a smaller
-# answer would compare round-off with round-off.  Below the floor an answer is
-# thus certified to an absolute fraction TOL * ZERO_ANSWER of the unsupported
-# one (measured: at 1e-8 the method of multipliers no longer certifies a flexible
-# beam lying flat on a gap-0 obstacle).
-ZERO_ANSWER = 1e-6
-# "In contact" with a rigid obstacle: a gap within this fraction of the answer's size.
-OBSTACLE_CONTACT_TOL = 1e-6
+__all__ = ["DiscreteProblem"]
 
 
-def complementarity(lam, gap, scale, size) -> float:
-    """Relative duality gap sum(lam * gap) / scale^2; gaps below TOUCH_TOL * size count as contact.
-
-    ``scale`` is the answer's energy norm and ``size`` its largest deflection.
-    The value bounds the answer's relative energy excess (and its square root
-    the relative error in the energy norm).
-    """
-    gap = np.where(gap > TOUCH_TOL * size, gap, 0.0)
-    return float(abs(lam @ gap) / scale**2)
-
-
-class DiscreteProblem:
+class DiscreteProblem(HermiteEnergy):
     """Non-dimensional arrays of one scene on its mesh.
 
     Parameters
@@ -343,39 +304,6 @@ class DiscreteProblem:
         """
         return depth if self.bilateral else np.maximum(depth, 0.0)
 
-    # ------------------------------------------------------------------ quadrature
-    # The Hermite-DOF matrices below serve CVM and the scoring of results; the
-    # solvers of the ground truth work on the mixed form (gaocvx.mixed).  They
-    # are built on first use.  Energies are evaluated from curvatures and slopes
-    # at Gauss points, not as u'Ku: the quadratic form cancels terms of size N^3
-    # down to O(1) and loses ~N^4 eps, curvatures lose only ~N^2 eps.
-    @functools.cached_property
-    def _curvature(self):
-        xq, wq, eq = fem.gauss_points(self.xi, 2)  # w'' is linear per element: exact
-        return fem.eval_matrix(self.xi, xq, 2, eq)[:, self.free].tocsr(), wq
-
-    @functools.cached_property
-    def _slope(self):
-        # slopes at 5 points: exact for (w')^4 (degree 8) and (w')^2
-        xq, wq, eq = fem.gauss_points(self.xi, GAO_POINTS)
-        B1 = fem.eval_matrix(self.xi, xq, 1, eq)[:, self.free].tocsr()
-        return B1, B1.T.tocsr(), wq  # transposes are cached: gradients are hot
-
-    @functools.cached_property
-    def _contact_quadrature(self):
-        xq, wq, eq = fem.gauss_points(self.xi, CONTACT_POINTS)
-        Nq = fem.eval_matrix(self.xi, xq, 0, eq)[:, self.free].tocsr()
-        return Nq, Nq.T.tocsr(), wq
-
-    B2 = property(lambda self: self._curvature[0])
-    wq2 = property(lambda self: self._curvature[1])
-    B1 = property(lambda self: self._slope[0])
-    B1T = property(lambda self: self._slope[1])
-    wq_gao = property(lambda self: self._slope[2])
-    Nq = property(lambda self: self._contact_quadrature[0])
-    NqT = property(lambda self: self._contact_quadrature[1])
-    wq_c = property(lambda self: self._contact_quadrature[2])
-
     @functools.cached_property
     def K(self) -> sp.csr_matrix:
         """Bending matrix on the free DOFs (non-dimensional)."""
@@ -460,82 +388,6 @@ class DiscreteProblem:
     def point_forces(self) -> np.ndarray:
         """Non-dimensional point forces [[xi_k, F_k], ...]."""
         return self._points_unit * [1.0, 1.0 / self.W]
-
-    # ------------------------------------------------------------------ energy
-    def nonlinear_gradient(self, u) -> np.ndarray:
-        """Gradient of the Gao, axial and foundation parts only (what CVM hides in u)."""
-        u = np.asarray(u, float)
-        return self.gradient(u) - (self.K @ u - self.f)
-
-    def energy_parts(self, u) -> dict:
-        """Non-dimensional energy parts at free DOFs ``u`` (multiply by E0 for J)."""
-        u = np.asarray(u, float)
-        parts = {"bending": 0.5 * (self.wq2 @ (self.B2 @ u) ** 2), "gao": 0.0, "axial": 0.0,
-                 "load": -(self.f @ u), "foundation": 0.0}
-        if self.needs_gao or self.p:
-            s = self.B1 @ u
-            parts["gao"] = self.a / 12.0 * (self.wq_gao @ s**4)
-            parts["axial"] = -0.5 * self.p * (self.wq_gao @ s**2)
-        if self.contact == "foundation":
-            pen = self.penetration(self.g - self.Nq @ u)
-            parts["foundation"] = 0.5 * ((self.c * self.wq_c) @ pen**2)
-        return {k: float(v) for k, v in parts.items()}
-
-    def energy(self, u) -> float:
-        """Non-dimensional total energy."""
-        return sum(self.energy_parts(u).values())
-
-    def gradient(self, u) -> np.ndarray:
-        """Gradient of the non-dimensional energy (continuous; semismooth with a foundation)."""
-        u = np.asarray(u, float)
-        r = self.K @ u - self.f
-        if self.p:
-            r -= self.p * (self.G @ u)
-        if self.needs_gao:
-            s = self.B1 @ u
-            r += (self.a / 3.0) * (self.B1T @ (self.wq_gao * s**3))
-        if self.contact == "foundation":
-            pen = self.penetration(self.g - self.Nq @ u)
-            r -= self.NqT @ (self.c * self.wq_c * pen)
-        return r
-
-    def hessian(self, u) -> sp.csr_matrix:
-        """(Generalised) Hessian of the non-dimensional energy; banded, SPD below P_bar_h."""
-        u = np.asarray(u, float)
-        H = self.K - self.p * self.G if self.p else self.K.copy()
-        if self.needs_gao:
-            s = self.B1 @ u
-            H = H + self.B1T @ sp.diags(self.a * self.wq_gao * s**2) @ self.B1
-        if self.contact == "foundation":
-            active = (self.g - self.Nq @ u) > 0 if not self.bilateral else 1.0
-            H = H + self.NqT @ sp.diags(self.c * self.wq_c * active) @ self.Nq
-        return H.tocsr()
-
-    def residual(self, u) -> dict:
-        """Optimality measure of free Hermite DOFs ``u`` (no obstacle).
-
-        ``stationarity`` is the dual norm ``sqrt(r' H^-1 r)`` of the gradient,
-        relative to the size of the problem (the energy norm of the solution or
-        of the load): for a quadratic energy it is exactly the relative error in
-        the energy norm.  The solvers of the ground truth certify on the better
-        conditioned mixed form (:func:`gaocvx.newton.certify`); this one serves
-        answers given in Hermite DOFs (CVM).
-        """
-        u = np.asarray(u, float)
-        if self.n == 0:
-            return {"stationarity": 0.0}
-        r = self.gradient(u)
-        H = self.hessian(u)
-        try:
-            chol = BandedCholesky(H)
-        except NotPositiveDefinite:
-            return {"stationarity": math.inf}
-        # The size of the problem: the solution's energy norm, or the load's when
-        # the solution is (near) zero.  Without any load the answer is w = 0, and
-        # W (the unit of u) is the scale.
-        load = math.sqrt(max(self.f @ chol.solve(self.f), 0.0))
-        scale = max(math.sqrt(max(u @ (H @ u), 0.0)), load) if load > 0 else 1.0
-        return {"stationarity": float(math.sqrt(max(r @ chol.solve(r), 0.0)) / scale)}
 
 
 def _profile_knots(scene: Scene) -> list:

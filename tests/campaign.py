@@ -355,7 +355,7 @@ def certified_floor(scene) -> tuple[float, float]:
     checkable size of the linear unsupported answer (one banded solve), not an
     output of the solvers under test.
     """
-    from gaocvx.discrete import ZERO_ANSWER
+    from gaocvx.tolerances import ZERO_ANSWER
     dp = gaocvx.DiscreteProblem(scene, check_convexity=False)
     w_floor = TOL_W * ZERO_ANSWER * dp.W_linear
     load = scene.load

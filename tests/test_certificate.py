@@ -14,7 +14,7 @@ import pytest
 from conftest import compressed_scene, scene_dict
 from gaocvx import DiscreteProblem, Scene, SceneError, SolverError, solve
 from gaocvx.cli import main
-from gaocvx.newton import shortfall
+from gaocvx.certificate import shortfall
 
 EXACT = ("newton", "convex")
 

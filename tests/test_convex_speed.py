@@ -15,7 +15,7 @@ import pytest
 from gaocvx import DiscreteProblem, Scene, solve
 from gaocvx import convex
 from gaocvx.mixed import MixedForm
-from gaocvx.newton import certify, passes
+from gaocvx.certificate import certify, passes
 
 BEAM = {"length": 1.0, "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1, "width": 1.0}
 

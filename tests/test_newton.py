@@ -6,7 +6,7 @@ from hypothesis import given, settings, strategies as st
 
 from conftest import compressed_scene, contact, scene_dict
 from gaocvx import DiscreteProblem, Scene, solve
-from gaocvx.discrete import ZERO_ANSWER
+from gaocvx.tolerances import ZERO_ANSWER
 from gaocvx.solve import choose_method
 
 KINDS = {

@@ -12,8 +12,8 @@ import pytest
 from conftest import EI_THESIS, scene_dict
 from exact import ExactBeam
 from gaocvx import DiscreteProblem, Scene, SolverError, solve
-from gaocvx.discrete import ZERO_ANSWER
-from gaocvx.newton import passes
+from gaocvx.tolerances import ZERO_ANSWER
+from gaocvx.certificate import passes
 
 pytestmark = pytest.mark.slow
 

@@ -9,7 +9,8 @@ import math
 import numpy as np
 import scipy.sparse as sp
 
-from ..discrete import OBSTACLE_CONTACT_TOL, ZERO_ANSWER, DiscreteProblem
+from ..discrete import DiscreteProblem
+from ..tolerances import OBSTACLE_CONTACT_TOL, ZERO_ANSWER
 from .kkt import Hessian, KKTFactor
 from .structure import structure_of
 

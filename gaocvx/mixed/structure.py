@@ -10,7 +10,8 @@ import scipy.sparse as sp
 
 from .. import fem
 from ..cache import LRU
-from ..discrete import CONTACT_POINTS, GAO_POINTS, DiscreteProblem
+from ..discrete import DiscreteProblem
+from ..hermite import CONTACT_POINTS, GAO_POINTS
 from ..linalg import VectorCSR
 
 

@@ -1,6 +1,6 @@
 """The local certificate of a global minimiser that an obstacle holds in place.
 
-:func:`gaocvx.newton.certify` measures the Newton decrement in the energy's
+:func:`gaocvx.certificate.certify` measures the Newton decrement in the energy's
 own Hessian, which is positive definite at every minimiser below ``P_bar_h``
 and at a free buckled minimiser above it (the Gao term stiffens it).  A
 buckled beam pressed onto an obstacle is different: the obstacle, not the
@@ -44,7 +44,7 @@ import numpy as np
 import scipy.linalg as la
 import scipy.optimize as so
 
-from ..discrete import TOUCH_TOL, complementarity
+from ..tolerances import TOUCH_TOL, complementarity
 
 __all__ = ["psi_certificate", "contact_multipliers", "certify_contact"]
 
@@ -75,7 +75,7 @@ def psi_certificate(dp, modes, u, lam, rows, levels=None, floor: float = 0.0) ->
     dict
         ``stationarity`` (relative to the answer's norm in ``H_psi``) and, with
         an obstacle, ``feasibility``, ``dual``, ``complementarity`` as in
-        :func:`gaocvx.newton.certify`.
+        :func:`gaocvx.certificate.certify`.
     """
     r = dp.gradient(u)
     if lam is not None:
@@ -174,7 +174,7 @@ def certify_contact(dp, modes, u, lam, rows, levels, floor: float = 0.0) -> tupl
     lam : ndarray or None
         The multipliers the measures belong to.
     """
-    from ..newton import passes
+    from ..certificate import passes
 
     tried = []
     for cand in contact_multipliers(dp, modes, u, rows, levels, floor) + [lam]:

@@ -42,9 +42,9 @@ import sys
 import numpy as np
 import scipy.optimize as so
 
-from .. import newton as nw
-from ..discrete import STATIONARITY_TOL, TOUCH_TOL, complementarity
+from ..certificate import passes, shortfall
 from ..linalg import one_blas_thread
+from ..tolerances import STATIONARITY_TOL, TOUCH_TOL, complementarity
 
 __all__ = ["amplitude_range", "contact_polish", "certify", "certify_contact", "RANGE_PAD",
            "POLISH_BUDGET"]
@@ -161,7 +161,7 @@ def contact_polish(prog, u, lam):
     systems.  Here :func:`gaocvx.contact_newton._iterate` at the largest
     penalty, on the mixed form, until feasibility, multipliers' sign and
     complementarity are within its margins (``start_only``: its own
-    stationarity measure is :func:`gaocvx.newton.certify`'s, whose metric, the
+    stationarity measure is :func:`gaocvx.certificate.certify`'s, whose metric, the
     energy's Hessian, is indefinite above ``P_bar_h``).  The iterate is judged
     by :func:`certify` and kept only if that passes, improves on the start's
     and the energy does not rise beyond round-off; otherwise ``(u, lam)``
@@ -191,7 +191,7 @@ def contact_polish(prog, u, lam):
         z = mf.on_manifold(z)
         after = certify(prog, z, lam2, floor)
         e1 = sum(mf.energy_parts(z).values())
-        if nw.passes(after) and nw.shortfall(after) < nw.shortfall(before) \
+        if passes(after) and shortfall(after) < shortfall(before) \
                 and e1 <= e0 + 1e-12 * max(abs(e0), 1.0):
             return mf.to_hermite(z), lam2
     return u, lam
@@ -218,7 +218,7 @@ def certify_contact(prog, z, lam, floor: float = 0.0) -> tuple:
     touching = np.where(mf.gap(z) <= TOUCH_TOL * _size(mf, z, floor), lam, 0.0)
     for cand in (touching, lam):
         res = certify(prog, z, cand, floor)
-        if nw.passes(res):
+        if passes(res):
             return res, cand
     return res, lam   # neither: the solver's own, as measured
 
@@ -242,7 +242,7 @@ def certify(prog, z, lam, floor: float = 0.0) -> dict:
     mixed form and the Woodbury identity (``prog._solve``).  ``z`` must lie on
     the linking constraints (``mf.on_manifold``).  A solve whose own residual,
     solved once more, is not small against the step makes the stationarity
-    infinite (as :func:`gaocvx.newton.certify`).  ``H_psi`` is positive
+    infinite (as :func:`gaocvx.certificate.certify`).  ``H_psi`` is positive
     definite when the modes passed their checks (``Psi`` convex, plus
     ``2 B' diag(c) B``), which the caller requires for ``optimal``.
     """

@@ -16,7 +16,7 @@ identity (a k x k capacitance matrix).
 
 **Primal.**  The method of multipliers (as :mod:`gaocvx.contact_newton`):
 semismooth Newton on the augmented Lagrangian of the obstacle rows (penalty
-``newton._penalty``'s largest) and of the 2k box rows, multipliers updated
+``certificate.penalty_range``'s largest) and of the 2k box rows, multipliers updated
 ``lam <- max(0, lam - rho gap)`` until the rows are violated by at most
 :data:`FEASIBLE` of the answer's size.  Its iterate gives the node's upper
 bound (the true energy, judged feasible or not by the caller) and the
@@ -80,10 +80,11 @@ import math
 
 import numpy as np
 
-from .. import newton as nw
+from ..certificate import penalty_range
 from ..contact_newton import RHO_START
 from ..linalg import one_blas_thread
 from ..mixed import MixedForm
+from ..newton import line_search
 from .fast import FastProgram
 from .node import NodeSolution, obstacle_rows
 
@@ -133,7 +134,7 @@ class FastContactProgram(FastProgram):
         self.mf = mf = MixedForm.on_obstacle(dp)   # same structure; w - g from small numbers
         self.s_origin = self.B @ mf.origin         # s = B z + s_origin (z relative to the origin)
         self.rows, self.levels = obstacle_rows(dp)  # the same rows as mf.A, in Hermite DOFs
-        _, self.rho = nw._penalty(mf)
+        _, self.rho = penalty_range(mf)
         self.c = np.asarray(modes.c, float)
         self._z = -mf.origin   # the undeformed beam
         self._lam = mf.no_contact_forces()
@@ -229,7 +230,7 @@ class FastContactProgram(FastProgram):
                 else:
                     out -= float(lam @ obs_d) + float(eta @ box_d)
                 return out
-            t = nw.line_search(dphi, float(g @ d) + shift)
+            t = line_search(dphi, float(g @ d) + shift)
             if t is None:
                 return z, value, abs(dec), convex and abs(dec) <= 1e-16 * floor
             z = z + t * d

@@ -23,7 +23,7 @@ Steps (nonconvex.md):
 8. other minimisers: every other group of leaves whose lower bound lies
    within the gap of the best is searched the same way; one within the
    tolerance of the best energy makes the minimiser not unique;
-9. the answer certified like every other (:func:`gaocvx.newton.certify`,
+9. the answer certified like every other (:func:`gaocvx.certificate.certify`,
    stationarity in the mixed variables) and the gap checked: ``optimal`` only
    when both pass.
 
@@ -49,7 +49,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..mixed import MixedForm
-from ..newton import answer, certify, passes
+from ..certificate import answer, certify, passes
 from . import bnb, dual
 from .alternatives import other_minimisers
 from .basin import BasinProver

@@ -220,7 +220,7 @@ def _check_contact(dp, prog, out) -> None:
     recomputed on the touching rows; one that fails becomes ``inaccurate``.
     """
     from ..mixed import MixedForm
-    from ..newton import passes
+    from ..certificate import passes
     from .certificate import certify_contact
 
     mf = MixedForm.on_obstacle(dp)
