@@ -154,6 +154,25 @@ def test_two_unstable_modes(q):
         assert len(eqs) == 5 and sum(e.stable for e in eqs) == 2 and eqs[-1].energy == 0.0
 
 
+@pytest.mark.parametrize("supports, axial", [
+    ("P1", 1.2e10), ("P2", 9e9), ("P3", 4e9), ("P4", 6e9),   # between lambda_2 and lambda_3
+])
+def test_two_unstable_modes_without_load_include_the_flat_beam(supports, axial):
+    """q = 0, k = 2: w = 0 is an equilibrium (the energy's gradient vanishes there
+    exactly) and unstable (P > lambda_1); the energy is even in w, so the mirror
+    image of every equilibrium is one too.  (A trial's P2 beam at 9e9 N listed
+    four and missed w = 0: the grid's middle point was -4e-16 S, not 0.)"""
+    scene = Scene.from_dict(scene_dict(supports, q=None, axial=axial, elements=16))
+    eqs = equilibria(scene)
+    assert all(len(e.amplitudes) == 2 and e.status == "optimal" for e in eqs)
+    flat = [e for e in eqs if not np.any(e.w)]
+    assert len(flat) == 1 and flat[0].energy == 0.0 and not flat[0].stable
+    independent_check(scene, eqs)
+    W = max(np.max(np.abs(e.w)) for e in eqs)
+    for e in eqs:
+        assert sum(np.allclose(-e.w, o.w, atol=1e-7 * W) for o in eqs) == 1
+
+
 # --------------------------------------------------------------------- fast path
 def _same_equilibria(fast, dense, S):
     """The same equilibria: count, stability, energies, amplitudes (paired by amplitude)."""

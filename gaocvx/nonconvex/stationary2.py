@@ -78,6 +78,9 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0) -> list:
         return 0.5 * (H + H.T)
 
     axis = np.linspace(-S, S, grid)
+    # (linspace's middle point is -4e-16 S, not 0: the unloaded beam's w = 0, an
+    # exact zero of ∇F only at s = 0, was then missed -- a P2 beam, 9e9 N, k = 2)
+    axis[grid // 2] = 0.0
     G = np.full((grid, grid, 2), np.nan)
     for i, a in enumerate(axis):
         for j, b in enumerate(axis):
@@ -98,6 +101,8 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0) -> list:
     top = np.nanmax(norms) if np.isfinite(norms).any() else 0.0
     for i, j in zip(*np.nonzero(norms <= 1e-12 * top)):
         seeds.insert(0, np.array([axis[i], axis[j]]))
+    if math.isfinite(grad(np.zeros(2))[0]):
+        seeds.insert(0, np.zeros(2))   # the unloaded beam's trivial equilibrium, if any
     roots = []
     for s in seeds:
         for _ in range(30):
