@@ -276,3 +276,44 @@ def test_the_dense_programs_call_no_deflection_optimal_that_is_no_kkt_point(draw
     rec = run(_draw(1, draw), methods=("dense",))
     kkt = [v for v in rec["violations"] if "kkt" in v or "energy" in v]
     assert not kkt, kkt
+
+
+UNLOADED_ENDS = [[0.0, 0.0], [0.3, 0.0], [0.5, 1.0], [0.7, 0.0], [1.0, 0.0]]
+
+
+@pytest.mark.parametrize("table, q, fraction", [
+    (UNLOADED_ENDS, -1e7, 1.02),   # a trial's scene: its one equilibrium, the flat beam,
+                                   # labelled unstable
+    (UNLOADED_ENDS, -1e5, 2.0),    # the flat beam and the unstable one next to it missed
+    ([[0.0, 0.0], [1.0, 1.0]], -1e5, 2.0),   # flat beam labelled unstable and inaccurate
+])
+def test_flat_beam_on_an_obstacle_at_gap_zero_under_a_load_with_unloaded_ends(table, q,
+                                                                               fraction):
+    """P4 at gap 0 under a load table that vanishes on [0, 0.3] and [0.7, 1]: the
+    flat beam is a strict local minimum (the independent second-order check: every
+    admissible direction either lifts the loaded part, against the load, or
+    buckles an unloaded end span, far below its own buckling load), so it must be
+    listed as stable.  Where the beam also buckles up to a second minimum (the
+    certified global one), a path between two strict minima crosses an unstable
+    equilibrium: at least one is listed.  (A triangular load, everywhere
+    pressing the beam down, makes the flat beam a minimum more plainly.)"""
+    from conftest import scene_dict
+    from gaocvx import DiscreteProblem, Scene, solve
+    d = scene_dict("P4", q=None, obstacle=0.0, elements=32)
+    d["load"]["q"] = [[x, q * v] for x, v in table]
+    pbar = DiscreteProblem(Scene.from_dict(d)).P_bar_h
+    d["load"]["axial"] = fraction * pbar
+    scene = Scene.from_dict(d)
+    eqs = equilibria(scene)
+    rng = np.random.default_rng(0)
+    for e in eqs:
+        c = check(scene, e, rng)
+        assert not c["violations"] and c["verdict"] == ("stable" if e.stable else "unstable"), c
+        assert e.status == "optimal"
+    flat = [e for e in eqs if np.max(np.abs(e.w)) <= 1e-9 * scene.beam.length]
+    assert len(flat) == 1 and flat[0].stable
+    g = solve(scene, "global")
+    lowest = [e for e in eqs if abs(e.energy - g.energy) <= 1e-8 * max(abs(g.energy), 1.0)]
+    assert lowest and lowest[0].stable
+    if np.max(np.abs(g.w)) > 1e-6:           # buckled: two minima, an unstable between
+        assert sum(e.stable for e in eqs) == 2 and len(eqs) >= 3

@@ -238,6 +238,30 @@ def _check_contact(dp, prog, out) -> None:
             e.status = "inaccurate"
 
 
+def _classify(dF, r, h) -> tuple:
+    """``(stable, curvature)`` of a zero ``r`` of F' from F' at ``r -+ h``.
+
+    A minimum of F has F' < 0 to its left and > 0 to its right; a side
+    outside the admissible amplitudes (an obstacle's edge: ``F = inf`` there)
+    counts as rising, for F cannot be lowered that way.  (Taking the probe's
+    F' = 0 outside the range for a slope labelled a flat beam held by a gap-0
+    obstacle, the certified global minimiser, unstable: a trial's P4 beam under
+    a load table with unloaded ends at 1.02 P_bar_h.)
+    """
+    mid = dF(r)[1]
+    left, right = (dF(r + t) for t in (-h, h))
+    fl, fr = math.isfinite(left[0]), math.isfinite(right[0])
+    if fl and fr:
+        curvature = (right[1] - left[1]) / (2 * h)
+        if right[1] != left[1]:
+            return bool(left[1] < 0 < right[1]), curvature
+        return bool(curvature > 0), curvature
+    if not (fl or fr):
+        return False, math.nan
+    curvature = (right[1] - mid) / h if fr else (mid - left[1]) / h
+    return bool(right[1] > 0 if fr else left[1] < 0), curvature
+
+
 def _find(dp, prog, S, seeds, grid, lo, hi, floor):
     t0 = time.perf_counter()
     cache = {}
@@ -303,7 +327,11 @@ def _find(dp, prog, S, seeds, grid, lo, hi, floor):
             sign = 1.0 if d[i] > 0 else -1.0
             res = so.minimize_scalar(lambda s: sign * dF(s)[1], bounds=(s_arr[i - 1], s_arr[i + 1]),
                                      method="bounded", options=dict(xatol=1e-12 * S))
-            if sign * res.fun < 0:
+            # (the least of sign F' below zero: F' crosses zero twice.  The test
+            # was sign * res.fun < 0, right for a minimum of F' only: a flat beam
+            # held by a gap-0 obstacle, a stable equilibrium, and the unstable one
+            # next to it were missed under a load table with unloaded ends)
+            if res.fun < 0:
                 refine(s_arr[i - 1], res.x)
                 refine(res.x, s_arr[i + 1])
     out = []
@@ -332,10 +360,7 @@ def _find(dp, prog, S, seeds, grid, lo, hi, floor):
             log.warning("equilibria: no admissible slice at the zero s = %.17g", r)
             out.append(None)   # (the caller's: the list is incomplete)
             continue
-        h = 1e-6 * S
-        left, right = dF(r - h)[1], dF(r + h)[1]
-        curvature = (right - left) / (2 * h)
-        stable = right > 0 and left < 0 if (right - left) != 0 else curvature > 0
+        stable, curvature = _classify(dF, r, 1e-6 * S)
         w, slope = dp.to_physical(u)
         # |F'| times the amplitude: the work of the residual force, relative to
         # the equilibrium's energy scale (w = 0: the amplitude range's thousandth)
@@ -352,10 +377,22 @@ def _find(dp, prog, S, seeds, grid, lo, hi, floor):
             # changes sign there, and the energy within |F'| 2e of F(r).  (The
             # slices of amplitudes 1e-12 from a flat beam's are round-off: wider
             # windows after the narrowest.)
+            # An edge of the admissible amplitudes within e of r (the obstacle holds
+            # the beam flat: no amplitude on one side) with F rising into the range
+            # is a minimum of F there, so of the energy, as at the ends above (a
+            # trial's P4 beam at gap 0 under a load of 1e5 N/m at 2 P_bar_h: the
+            # flat beam's zero had its left probe outside the range and was
+            # reported unstable and inaccurate).
             for e in (1e-12 * S, 1e-10 * S, 1e-9 * S):
                 a, b = dF(r - e), dF(r + e)
-                if math.isfinite(a[0]) and math.isfinite(b[0]) and a[1] * b[1] < 0:
+                fa, fb = math.isfinite(a[0]), math.isfinite(b[0])
+                if fa and fb and a[1] * b[1] < 0:
                     res = min(res, max(abs(a[1]), abs(b[1])) * 2 * e / size)
+                    stable = a[1] < 0
+                    break
+                if fa != fb and (b[1] > 0 if fb else a[1] < 0):
+                    res = min(res, abs((b if fb else a)[1]) * e / size)
+                    stable = True
                     break
         status = "optimal" if ok and res <= ROOT_TOL else "inaccurate"
         out.append(Equilibrium(float(dp.energy(u) * dp.E0), bool(stable), [float(r)], dp.x.copy(),
