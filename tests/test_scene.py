@@ -84,6 +84,9 @@ def test_missing_and_conflicting():
         Scene.from_dict(scene_dict(foundation=(0.01, 1e9), obstacle=0.01))
     with pytest.raises(SceneError, match="^foundation.stiffness: missing"):
         Scene.from_dict({**scene_dict(), "foundation": {"gap": 0.01}})
+    # the table as given is shown: what the missing key was to go with
+    with pytest.raises(SceneError, match=r"^foundation.gap: missing \(got .*'stiffness'"):
+        Scene.from_dict({**scene_dict(), "foundation": {"stiffness": 1e9}})
     with pytest.raises(SceneError, match="^beam.E_alpha: is not used"):
         Scene.from_dict(scene_dict(model="euler-bernoulli", E_alpha=1.0))
     with pytest.raises(SceneError, match="^extras: unknown key"):

@@ -91,7 +91,8 @@ class Scene:
         _table("scene", data)
         _reject_unknown("", data, tuple(_PARTS))
         if "beam" not in data:
-            raise SceneError("beam", "missing: every scene needs a [beam] table")
+            raise SceneError("beam", "missing: every scene needs a [beam] table",
+                             sorted(data))
         parts = {}
         for name, kind in _PARTS.items():
             if name not in data:
@@ -103,8 +104,10 @@ class Scene:
             except TypeError as exc:  # a required field is missing
                 missing = [f.name for f in dataclasses.fields(kind)
                            if f.default is dataclasses.MISSING and f.name not in section]
+                # (the table as given: a --set that made it, e.g. foundation.stiffness
+                # alone, shows what the missing key was to go with)
                 raise SceneError(f"{name}.{missing[0]}" if missing else name,
-                                 "missing") from exc
+                                 "missing", {name: dict(section)}) from exc
         return cls(**parts)
 
     def to_dict(self) -> dict:
