@@ -317,3 +317,42 @@ def test_flat_beam_on_an_obstacle_at_gap_zero_under_a_load_with_unloaded_ends(ta
     assert lowest and lowest[0].stable
     if np.max(np.abs(g.w)) > 1e-6:           # buckled: two minima, an unstable between
         assert sum(e.stable for e in eqs) == 2 and len(eqs) >= 3
+
+
+# Two trial scenes with two unstable modes whose stable equilibria on the obstacle
+# were missed (the search's coarse grid steps over them).  The energies are those
+# of the trial's independent minimisers: SLSQP on the independent energy
+# (tests/nonconvex_independent.py) from 50 starts, polished by Newton on the face
+# of the touching rows (stationarity 1e-14, feasible, curvature positive on the
+# free directions).
+TRIAL_MISSES = [
+    pytest.param(   # P2 resting on an obstacle 1.6 cm below, 16 elements
+        {"q": -37519754.61729069, "axial": 7569181961.345659},
+        {"gap": 0.01611473461848526}, 16, [-4683105.68631], id="P2-obstacle"),
+    pytest.param(   # P2 in a channel, table load, 8 elements: the global minimum was missed
+        {"q": [[0.0, -22201004.528226774], [1.0, -60366920.49621304]],
+         "axial": 8066670442.099871},
+        {"gap": 0.006483189504534244, "gap_above": 0.006066195278620083}, 8,
+        [-937739.640805, -576759.930282], id="P2-channel"),
+]
+
+
+@pytest.mark.parametrize("load, obstacle, elements, missed", TRIAL_MISSES)
+def test_two_modes_on_an_obstacle_list_the_trials_stable_equilibria(load, obstacle, elements,
+                                                                    missed):
+    """Every listed equilibrium passes the independent check, and the stable
+    equilibria the trial found independently are among them."""
+    from conftest import scene_dict
+    from gaocvx import Scene
+    d = scene_dict("P2", q=None, elements=elements)
+    d["load"].update(load)
+    d["obstacle"] = obstacle
+    scene = Scene.from_dict(d)
+    eqs = equilibria(scene)
+    rng = np.random.default_rng(0)
+    for e in eqs:
+        c = check(scene, e, rng)
+        assert not c["violations"] and c["verdict"] == ("stable" if e.stable else "unstable"), c
+    for energy in missed:
+        assert any(e.stable and e.status == "optimal" and abs(e.energy - energy) <= 1e-8 * abs(energy)
+                   for e in eqs), (energy, [(e.energy, e.stable) for e in eqs])

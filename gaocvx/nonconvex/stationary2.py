@@ -5,22 +5,32 @@ The equilibria are the stationary points of ``F(s1, s2)`` (nonconvex.md; see
 every zero is found, so this search is a careful sampling, not a proof:
 
 1. ``∇F`` on a ``GRID2 x GRID2`` grid of the square ``[-S, S]^2``
-   (:func:`.bounds.equilibrium_box`: every equilibrium has ``|s| <= S``);
+   (:func:`.bounds.equilibrium_box`: every equilibrium has ``|s| <= S``; with
+   an obstacle, of its part within the admissible amplitudes' box), with
+   ``s = 0`` exactly among the points; with an obstacle or channel also on
+   finer grids of the boxes where a mode alone reaches a surface of it
+   (:func:`_zoom_boxes`);
 2. every grid cell on whose corners both components of ``∇F`` change sign
    seeds Newton's method on ``∇F = 0`` (the Hessian of F by central
-   differences of the envelope gradient), damped to stay in the square;
+   differences of the envelope gradient), damped to stay in the square, and
+   so do ``s = 0`` and the given starts (with an obstacle: the certified global
+   minimiser's amplitudes, :func:`.stationary._global_starts`);
 3. zeros are merged when closer than 1e-6 S; each is classified by the
    eigenvalues of its Hessian: both positive is a local minimum of the energy
    (stable), else unstable (a saddle or a maximum of F);
 4. with an obstacle or channel, a local minimum of ``F`` at a kink or at the
-   edge of the admissible amplitudes (a beam pressed flat onto an obstacle at
-   gap 0) is no zero of ``∇F``: every grid point whose ``F`` is lowest among
-   its admissible neighbours is refined by Nelder-Mead on ``F`` (inadmissible
-   amplitudes count as ``+inf``) and, when it is no zero found by step 2,
-   reported as a stable equilibrium if no admissible probe around it within
-   1e-9 S is lower (a local minimum of ``F`` is one of the energy:
-   ``Pi(s, v) >= F(s) >= F(s*)`` nearby).  Unstable equilibria at a kink or
-   an edge are not searched.
+   edge of the admissible amplitudes (a beam resting on the obstacle, or
+   pressed flat onto it at gap 0) is no zero of ``∇F``: every grid point whose
+   ``F`` is lowest among its admissible neighbours, and every start, is refined
+   by Nelder-Mead on ``F`` (inadmissible amplitudes count as ``+inf``) and,
+   when it is no zero found by step 2, reported as a stable equilibrium if no
+   admissible probe around it within 1e-9 S is lower (a local minimum of ``F``
+   is one of the energy: ``Pi(s, v) >= F(s) >= F(s*)`` nearby).  Unstable
+   equilibria at a kink or an edge are not searched;
+5. with an obstacle, the mirror images (x -> L - x) of the equilibria found,
+   where mesh and supports are symmetric, seed steps 2 and 4 again, and every
+   equilibrium called ``optimal`` must pass the global method's optimality
+   conditions (:func:`_certify`), else it is ``inaccurate``.
 
 Examples
 --------
@@ -52,11 +62,17 @@ log = logging.getLogger(__name__)
 GRID2 = 25  # odd: (0, 0) is a grid point
 
 
-def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0) -> list:
+def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
+               starts=()) -> list:
     """Every zero of ``∇F`` found in ``[-S, S]^2`` (see the module's notes).
 
     ``floor`` [in the program's energy unit]: the smallest energy scale residuals are
-    relative to (the scene's: a flat beam's own energy parts are 0).
+    relative to (the scene's: a flat beam's own energy parts are 0).  With an
+    obstacle the grid spans only the admissible amplitudes' box (``prog.smin``,
+    ``prog.smax``: bounds by a linear program's duality), as for k = 1, and
+    finer grids span the boxes where the unstable modes reach the obstacle
+    (:func:`_zoom_boxes`, from ``modes``); ``starts`` (amplitudes: the
+    certified global minimiser's) seed Newton's method and the edge minima.
     """
     t0 = time.perf_counter()
     cache = {}
@@ -77,33 +93,47 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0) -> list:
             H[:, j] = (grad(s + e)[1] - grad(s - e)[1]) / (2 * h)
         return 0.5 * (H + H.T)
 
-    axis = np.linspace(-S, S, grid)
-    # (linspace's middle point is -4e-16 S, not 0: the unloaded beam's w = 0, an
-    # exact zero of ∇F only at s = 0, was then missed -- a P2 beam, 9e9 N, k = 2)
-    axis[grid // 2] = 0.0
-    G = np.full((grid, grid, 2), np.nan)
-    for i, a in enumerate(axis):
-        for j, b in enumerate(axis):
-            F, d, _, _ = grad(np.array([a, b]))
-            if math.isfinite(F):
-                G[i, j] = d
-    seeds = []
-    for i in range(grid - 1):
-        for j in range(grid - 1):
-            corners = G[i:i + 2, j:j + 2].reshape(4, 2)
-            if np.isnan(corners).any():
-                continue
-            if all(corners[:, c].min() <= 0 <= corners[:, c].max() for c in range(2)):
-                seeds.append(np.array([0.5 * (axis[i] + axis[i + 1]),
-                                       0.5 * (axis[j] + axis[j + 1])]))
-    # A grid point that is a zero itself (w = 0 without load: s = 0 exactly).
-    norms = np.linalg.norm(G, axis=2)
-    top = np.nanmax(norms) if np.isfinite(norms).any() else 0.0
-    for i, j in zip(*np.nonzero(norms <= 1e-12 * top)):
-        seeds.insert(0, np.array([axis[i], axis[j]]))
+    lo = np.maximum(-S, np.asarray(getattr(prog, "smin", [-S, -S]), float))
+    hi = np.minimum(S, np.asarray(getattr(prog, "smax", [S, S]), float))
+    grids = [[_axis(lo[j], hi[j], grid) for j in range(2)]]
+    if dp.contact == "obstacle" and modes is not None:
+        grids += [[_axis(a[j], b[j], grid) for j in range(2)]
+                  for a, b in _zoom_boxes(dp, modes, lo, hi)]
+    seeds = [np.asarray(x, float) for x in starts]
+    for axes in grids:
+        seeds += _grid_seeds(grad, axes)
     if math.isfinite(grad(np.zeros(2))[0]):
         seeds.insert(0, np.zeros(2))   # the unloaded beam's trivial equilibrium, if any
-    roots = []
+    roots = _newton(grad, hessian, seeds, S)
+    out = _at_roots(dp, grad, hessian, roots, S)
+    if dp.contact == "obstacle":
+        def found():
+            return [np.asarray(e.amplitudes) for e in out]
+        for axes in grids:
+            out += _edge_minima(dp, grad, axes, S, found(), floor)
+        out += _edge_minima(dp, grad, None, S, found(), floor, starts)
+        # The flat beam at gap 0 may be a minimum whose basin is far below the
+        # grid's step (F rises over 1e-9 S, then falls: a P4 beam under a load
+        # table, 8 elements): tried with a simplex of that size.
+        out += _edge_minima(dp, grad, None, S, found(), floor, [np.zeros(2)], 1e-8)
+        # A symmetric scene's equilibria come in mirror pairs: an image not found
+        # seeds both searches again (P1 on an obstacle 1 cm below, k = 2: a beam
+        # resting on it just off the middle was found, its image was not)
+        images = _images(dp, modes, grad, out, S) if modes is not None else []
+        if images:
+            out += _at_roots(dp, grad, hessian, _newton(grad, hessian, images, S, found()), S)
+            out += _edge_minima(dp, grad, None, S, found(), floor, images)
+        _certify(dp, prog, out)
+    out.sort(key=lambda e: e.energy)
+    log.info("equilibria (k = 2): %d found from %d seeds, %d solves in %.2f s", len(out),
+             len(seeds), len(cache), time.perf_counter() - t0)
+    return out
+
+
+def _newton(grad, hessian, seeds, S, known=()) -> list:
+    """Newton's method on ``∇F = 0`` from each seed; the distinct end points."""
+    roots = [np.asarray(r, float) for r in known]
+    count = len(roots)
     for s in seeds:
         for _ in range(30):
             F, d, _, _ = grad(s)
@@ -123,7 +153,17 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0) -> list:
         if math.isfinite(grad(s)[0]) and not any(np.linalg.norm(s - r) <= 1e-6 * S
                                                   for r in roots):
             roots.append(s)
-    out = _edge_minima(dp, grad, axis, S, roots, floor) if dp.contact == "obstacle" else []
+    return roots[count:]
+
+
+def _at_roots(dp, grad, hessian, roots, S) -> list:
+    """The equilibria at Newton's end points that are zeros of ``∇F`` (step 3).
+
+    (End points where Newton did not converge, at a kink of F, are left to the
+    edge minima: they once also kept the edge minima from reporting a beam
+    resting on the obstacle there.)
+    """
+    out = []
     for r in roots:
         F, d, u, ok = grad(r)
         size = sum(abs(v) for v in dp.energy_parts(u).values()) or 1.0
@@ -136,13 +176,110 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0) -> list:
         out.append(Equilibrium(float(dp.energy(u) * dp.E0), bool(eig[0] > 0),
                                [float(x) for x in r], dp.x.copy(), w, slope, res, status,
                                float(dp.P), float(eig[0]), float(dp.W)))
-    out.sort(key=lambda e: e.energy)
-    log.info("equilibria (k = 2): %d found from %d seeds, %d solves in %.2f s", len(out),
-             len(seeds), len(cache), time.perf_counter() - t0)
     return out
 
 
-def _edge_minima(dp, grad, axis, S, roots, floor) -> list:
+def _images(dp, modes, grad, out, S) -> list:
+    """Amplitudes of the mirror images (x -> L - x) of the equilibria found, where
+    mesh and supports are symmetric, less those found already."""
+    from .polish import reflections
+
+    have = [np.asarray(e.amplitudes) for e in out]
+    images = []
+    for e in out:
+        u = grad(np.asarray(e.amplitudes, float))[2]
+        for image in reflections(dp, u)[:1]:
+            s = np.asarray(modes.phi.T @ (dp.G @ image), float)
+            if not any(np.linalg.norm(s - h) <= 1e-6 * S for h in have + images):
+                images.append(s)
+    return images
+
+
+def _certify(dp, prog, out) -> None:
+    """Each ``optimal`` equilibrium with an obstacle: a KKT point, else ``inaccurate``.
+
+    The residuals above (``|∇F|`` times a radius) cannot see a deflection that
+    is no equilibrium of the beam; the optimality conditions are checked as the
+    global method's answers are (:func:`.stationary.kkt_point`).
+    """
+    from .stationary import kkt_point
+
+    for e in out:
+        if e.status == "optimal" and not kkt_point(dp, prog, e.amplitudes):
+            log.info("equilibria: the equilibrium at s = %s is no KKT point: inaccurate",
+                     e.amplitudes)
+            e.status = "inaccurate"
+
+
+def _grid_seeds(grad, axes) -> list:
+    """Newton's seeds on one grid: cells where both components of ``∇F`` change
+    sign, and grid points that are zeros themselves (w = 0 without load)."""
+    G = np.full((len(axes[0]), len(axes[1]), 2), np.nan)
+    for i, a in enumerate(axes[0]):
+        for j, b in enumerate(axes[1]):
+            F, d, _, _ = grad(np.array([a, b]))
+            if math.isfinite(F):
+                G[i, j] = d
+    seeds = []
+    for i in range(len(axes[0]) - 1):
+        for j in range(len(axes[1]) - 1):
+            corners = G[i:i + 2, j:j + 2].reshape(4, 2)
+            if np.isnan(corners).any():
+                continue
+            if all(corners[:, c].min() <= 0 <= corners[:, c].max() for c in range(2)):
+                seeds.append(np.array([0.5 * (axes[0][i] + axes[0][i + 1]),
+                                       0.5 * (axes[1][j] + axes[1][j + 1])]))
+    norms = np.linalg.norm(G, axis=2)
+    top = np.nanmax(norms) if np.isfinite(norms).any() else 0.0
+    for i, j in zip(*np.nonzero(norms <= 1e-12 * top)):
+        seeds.insert(0, np.array([axes[0][i], axes[1][j]]))
+    return seeds
+
+
+def _zoom_boxes(dp, modes, lo, hi) -> list:
+    """Boxes of amplitudes in which the unstable modes reach the obstacle.
+
+    A beam held by an obstacle 1.6 cm below, buckled 21 cm by itself, has its
+    equilibria on the obstacle within 8 % of the amplitudes' range: the 25 x 25
+    grid's step.  A trial found stable equilibria missed in 19 of 40 scenes with
+    two modes and an obstacle or channel (P2 resting on an obstacle, P1 in
+    channels, P4 on obstacles 0.05-0.2 mm below).  For each distance of the
+    obstacle's surfaces from the beam (the nearest and the farthest point of
+    each), the box of half-width three times the amplitude at which a mode
+    alone reaches it, when that is less than a quarter of the grid's range.
+    """
+    peak = np.max(np.abs(modes.phi[dp._w_rows()]), axis=0)
+    dist = [abs(float(np.min(np.abs(dp.g)))), abs(float(np.max(np.abs(dp.g))))]
+    if dp.g_above is not None:
+        dist.append(float(np.min(dp.g_above)))
+        dist.append(float(np.max(dp.g_above)))
+    boxes = []
+    for d in sorted(set(x for x in dist if x > 0)):
+        half = 3.0 * d / np.maximum(peak, 1e-300)
+        if np.all(half < 0.25 * (hi - lo)) and \
+                not any(np.all(half <= 2.0 * b[1]) for b in boxes):
+            boxes.append((np.maximum(lo, -half), np.minimum(hi, half)))
+    return boxes
+
+
+def _axis(lo: float, hi: float, grid: int) -> np.ndarray:
+    """``grid`` points from ``lo`` to ``hi``, with 0 exactly when it lies between.
+
+    (linspace's middle point of [-S, S] is -4e-16 S, not 0: the unloaded beam's
+    w = 0, an exact zero of ∇F at s = 0 only, was then missed -- a P2 beam at
+    9e9 N, k = 2)
+    """
+    axis = np.linspace(lo, hi, grid)
+    if not lo <= 0.0 <= hi:
+        return axis
+    i = int(np.argmin(np.abs(axis)))
+    if abs(axis[i]) <= 1e-9 * (hi - lo):
+        axis[i] = 0.0
+        return axis
+    return np.union1d(axis, [0.0])
+
+
+def _edge_minima(dp, grad, axes, S, roots, floor, starts=(), step=1e-3) -> list:
     """Stable equilibria at a kink or an edge of the admissible amplitudes (step 4).
 
     Without them a beam pressed flat onto an obstacle at gap 0 with two unstable
@@ -152,9 +289,6 @@ def _edge_minima(dp, grad, axis, S, roots, floor) -> list:
     """
     import scipy.optimize as so
 
-    n = len(axis)
-    F = np.array([[grad(np.array([a, b]))[0] for b in axis] for a in axis])
-    F = np.where(np.isfinite(F), F, np.inf)
     out = []
 
     def f(s):
@@ -163,33 +297,45 @@ def _edge_minima(dp, grad, axis, S, roots, floor) -> list:
         v = grad(np.asarray(s, float))[0]
         return v if math.isfinite(v) else math.inf
 
+    for s0, h in _local_minima(grad, axes) if axes is not None else \
+            [(np.asarray(x, float), np.full(2, step * S)) for x in starts]:
+        simplex = np.array([s0, s0 + [0.25 * h[0], 0.0], s0 + [0.0, 0.25 * h[1]]])
+        res = so.minimize(f, s0, method="Nelder-Mead",
+                          options=dict(initial_simplex=simplex, xatol=1e-12 * S,
+                                       fatol=0.0, maxiter=400))
+        s = np.asarray(res.x, float)
+        if not math.isfinite(f(s)) or \
+                any(np.linalg.norm(s - np.asarray(r)) <= 1e-6 * S for r in roots) or \
+                any(np.linalg.norm(s - np.asarray(e.amplitudes)) <= 1e-6 * S for e in out):
+            continue
+        F0, d, u, ok = grad(s)
+        e = 1e-9 * S
+        probes = [f(s + e * np.array([math.cos(t), math.sin(t)]))
+                  for t in np.linspace(0, 2 * math.pi, 8, endpoint=False)]
+        if min(probes) < F0:
+            continue   # (not a minimum at this resolution: a zero of ∇F is step 2's)
+        size = max(sum(abs(v) for v in dp.energy_parts(u).values()), floor) or 1.0
+        resid = float(np.linalg.norm(d)) * e / size
+        status = "optimal" if ok and resid <= ROOT_TOL else "inaccurate"
+        w, slope = dp.to_physical(u)
+        out.append(Equilibrium(float(dp.energy(u) * dp.E0), True, [float(x) for x in s],
+                               dp.x.copy(), w, slope, resid, status, float(dp.P),
+                               math.nan, float(dp.W)))
+    return out
+
+
+def _local_minima(grad, axes) -> list:
+    """Grid points whose ``F`` is lowest among their admissible neighbours, each with
+    the spans ``(h0, h1)`` of its neighbourhood (a Nelder-Mead simplex's size)."""
+    n, m = len(axes[0]), len(axes[1])
+    F = np.array([[grad(np.array([a, b]))[0] for b in axes[1]] for a in axes[0]])
+    F = np.where(np.isfinite(F), F, np.inf)
+    out = []
     for i in range(n):
-        for j in range(n):
-            if not math.isfinite(F[i, j]) or \
-                    F[i, j] > F[max(i - 1, 0):i + 2, max(j - 1, 0):j + 2].min():
-                continue
-            h = axis[1] - axis[0]
-            s0 = np.array([axis[i], axis[j]])
-            simplex = np.array([s0, s0 + [0.5 * h, 0.0], s0 + [0.0, 0.5 * h]])
-            res = so.minimize(f, s0, method="Nelder-Mead",
-                              options=dict(initial_simplex=simplex, xatol=1e-12 * S,
-                                           fatol=0.0, maxiter=400))
-            s = np.asarray(res.x, float)
-            if not math.isfinite(f(s)) or \
-                    any(np.linalg.norm(s - r) <= 1e-6 * S for r in roots) or \
-                    any(np.linalg.norm(s - np.asarray(e.amplitudes)) <= 1e-6 * S for e in out):
-                continue
-            F0, d, u, ok = grad(s)
-            e = 1e-9 * S
-            probes = [f(s + e * np.array([math.cos(t), math.sin(t)]))
-                      for t in np.linspace(0, 2 * math.pi, 8, endpoint=False)]
-            if min(probes) < F0:
-                continue   # (not a minimum at this resolution: a zero of ∇F is step 2's)
-            size = max(sum(abs(v) for v in dp.energy_parts(u).values()), floor) or 1.0
-            resid = float(np.linalg.norm(d)) * e / size
-            status = "optimal" if ok and resid <= ROOT_TOL else "inaccurate"
-            w, slope = dp.to_physical(u)
-            out.append(Equilibrium(float(dp.energy(u) * dp.E0), True, [float(x) for x in s],
-                                   dp.x.copy(), w, slope, resid, status, float(dp.P),
-                                   math.nan, float(dp.W)))
+        for j in range(m):
+            if math.isfinite(F[i, j]) and \
+                    F[i, j] <= F[max(i - 1, 0):i + 2, max(j - 1, 0):j + 2].min():
+                h = np.array([axes[0][min(i + 1, n - 1)] - axes[0][max(i - 1, 0)],
+                              axes[1][min(j + 1, m - 1)] - axes[1][max(j - 1, 0)]])
+                out.append((np.array([axes[0][i], axes[1][j]]), h))
     return out
