@@ -220,8 +220,10 @@ class ContactSlices:
         nu, previous, full = np.zeros(k), math.inf, False
         for _ in range(max_iter):
             g, H = mf.gradient(z, **al), mf.hessian(z, **al)
-            factor = mf.kkt_factor(H)
             try:
+                # (inside: far outside the admissible amplitudes the factor itself
+                # can be singular -- a Newton step of 2e8 S in a trial's k = 2 search)
+                factor = mf.kkt_factor(H)
                 R, Rmu = factor.solve(np.column_stack([-g, B.T]),
                                       np.column_stack([-mf.link(z), np.zeros((mf.N, k))]))
                 r0, X, m0, Xmu = R[:, 0], R[:, 1:], Rmu[:, 0], Rmu[:, 1:]

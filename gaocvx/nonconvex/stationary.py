@@ -171,25 +171,25 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
     # of u'K u / t, so none is used; equilibrium_box counts the foundation itself)
     lam1 = 0.0 if getattr(dp, "bilateral", False) else float(modes.lam[0]) * (1.0 - 1e-9)
     S = float(equilibrium_box(dp, lam1))
+    lo, hi = np.full(modes.k, -S), np.full(modes.k, S)
+    if obstacle:
+        # The grid over the admissible amplitudes only: a channel of 2 mm in a scale
+        # of 17 cm (the one-mode estimate's) left one grid point of 121 admissible
+        # (s = 0), and two of three equilibria were missed; with two modes the dense
+        # programs, without it, missed a stable pair in a 2 mm channel.  The range
+        # is a linear program's, its ends bounds by weak duality
+        # (:func:`.fast_check.amplitude_range`; the fast program computes it on
+        # construction: with it, the same program).
+        from .fast_contact import FastContactProgram
+        ranged = prog.prog if fast else FastContactProgram(dp, modes)
+        lo, hi = np.maximum(lo, ranged.smin), np.minimum(hi, ranged.smax)
     if modes.k == 2:
         from .stationary2 import find_plane
         out = find_plane(dp, prog, S, floor=scene_energy(dp, modes), modes=modes,
-                         starts=_global_starts(dp, modes) if obstacle else ())
+                         starts=_global_starts(dp, modes) if obstacle else (), box=(lo, hi))
     else:
-        out = None
-    lo, hi = -S, S
-    if out is None and dp.contact == "obstacle":
-        # The grid over the admissible amplitudes only: a channel of 2 mm in a scale
-        # of 17 cm (the one-mode estimate's) left one grid point of 121 admissible
-        # (s = 0), and two of three equilibria were missed.  The range is a linear
-        # program's, its ends bounds by weak duality (:func:`.fast_check.amplitude_range`).
-        # (the fast program computes it on construction: with it, the same program)
-        from .fast_contact import FastContactProgram
-        ranged = prog if fast else FastContactProgram(dp, modes)
-        lo, hi = max(-S, float(ranged.smin[0])), min(S, float(ranged.smax[0]))
-    if out is None:
-        out = _find(dp, prog, S, np.asarray(seeds, float) / dp.W, grid, lo, hi,
-                    scene_energy(dp, modes))
+        out = _find(dp, prog, S, np.asarray(seeds, float) / dp.W, grid, float(lo[0]),
+                    float(hi[0]), scene_energy(dp, modes))
         if not fast and obstacle:
             _check_contact(dp, prog, out)
     if out and all(e is not None for e in out):
@@ -219,8 +219,9 @@ def _global_starts(dp, modes) -> list:
     from .minimum import solve_global
     try:
         dpg, raw, info = solve_global(dp, modes)
-    except (SceneError, SolverError) as exc:
-        log.info("equilibria: no global minimiser to start from (%s)", exc)
+    except (SceneError, SolverError, ArithmeticError, np.linalg.LinAlgError) as exc:
+        # (only a start: the sampling goes on without it)
+        log.warning("equilibria: no global minimiser to start from (%s)", exc)
         return []
     if raw.get("status") != "optimal":
         return []

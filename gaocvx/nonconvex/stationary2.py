@@ -63,13 +63,14 @@ GRID2 = 25  # odd: (0, 0) is a grid point
 
 
 def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
-               starts=()) -> list:
+               starts=(), box=None) -> list:
     """Every zero of ``∇F`` found in ``[-S, S]^2`` (see the module's notes).
 
     ``floor`` [in the program's energy unit]: the smallest energy scale residuals are
     relative to (the scene's: a flat beam's own energy parts are 0).  With an
-    obstacle the grid spans only the admissible amplitudes' box (``prog.smin``,
-    ``prog.smax``: bounds by a linear program's duality), as for k = 1, and
+    obstacle the grid spans only the admissible amplitudes' ``box`` (``(lo, hi)``:
+    bounds by a linear program's duality, :func:`.fast_check.amplitude_range`;
+    by default ``prog``'s own, if it has them), as for k = 1, and
     finer grids span the boxes where the unstable modes reach the obstacle
     (:func:`_zoom_boxes`, from ``modes``); ``starts`` (amplitudes: the
     certified global minimiser's) seed Newton's method and the edge minima.
@@ -85,16 +86,30 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
         return cache[key]
 
     def hessian(s):
+        # central differences of the gradient; one-sided next to an edge of the
+        # admissible amplitudes (F = inf and a gradient of zeros beyond it, which
+        # once gave a Newton step of 6e11 from the flat beam at gap 0); None
+        # where neither side is admissible
         h = 1e-6 * S
         H = np.empty((2, 2))
+        mid = grad(s)
         for j in range(2):
             e = np.zeros(2)
             e[j] = h
-            H[:, j] = (grad(s + e)[1] - grad(s - e)[1]) / (2 * h)
+            up, down = grad(s + e), grad(s - e)
+            if math.isfinite(up[0]) and math.isfinite(down[0]):
+                H[:, j] = (up[1] - down[1]) / (2 * h)
+            elif math.isfinite(up[0]) or math.isfinite(down[0]):
+                H[:, j] = (up[1] - mid[1]) / h if math.isfinite(up[0]) \
+                    else (mid[1] - down[1]) / h
+            else:
+                return None
         return 0.5 * (H + H.T)
 
-    lo = np.maximum(-S, np.asarray(getattr(prog, "smin", [-S, -S]), float))
-    hi = np.minimum(S, np.asarray(getattr(prog, "smax", [S, S]), float))
+    if box is None:
+        box = (getattr(prog, "smin", [-S, -S]), getattr(prog, "smax", [S, S]))
+    lo = np.maximum(-S, np.asarray(box[0], float))
+    hi = np.minimum(S, np.asarray(box[1], float))
     grids = [[_axis(lo[j], hi[j], grid) for j in range(2)]]
     if dp.contact == "obstacle" and modes is not None:
         grids += [[_axis(a[j], b[j], grid) for j in range(2)]
@@ -104,8 +119,7 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
         seeds += _grid_seeds(grad, axes)
     if math.isfinite(grad(np.zeros(2))[0]):
         seeds.insert(0, np.zeros(2))   # the unloaded beam's trivial equilibrium, if any
-    roots = _newton(grad, hessian, seeds, S)
-    out = _at_roots(dp, grad, hessian, roots, S)
+    out = _at_roots(dp, grad, hessian, _newton(grad, hessian, seeds, S), S)
     if dp.contact == "obstacle":
         def found():
             return [np.asarray(e.amplitudes) for e in out]
@@ -121,7 +135,7 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
         # resting on it just off the middle was found, its image was not)
         images = _images(dp, modes, grad, out, S) if modes is not None else []
         if images:
-            out += _at_roots(dp, grad, hessian, _newton(grad, hessian, images, S, found()), S)
+            out += _at_roots(dp, grad, hessian, _newton(grad, hessian, images, S), S, found())
             out += _edge_minima(dp, grad, None, S, found(), floor, images)
         _certify(dp, prog, out)
     out.sort(key=lambda e: e.energy)
@@ -130,47 +144,56 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
     return out
 
 
-def _newton(grad, hessian, seeds, S, known=()) -> list:
-    """Newton's method on ``∇F = 0`` from each seed; the distinct end points."""
-    roots = [np.asarray(r, float) for r in known]
-    count = len(roots)
+def _newton(grad, hessian, seeds, S) -> list:
+    """Newton's method on ``∇F = 0`` from each seed; the end points (merged later,
+    among those that are zeros: an end point where Newton did not converge must
+    not hide a zero next to it)."""
+    ends = []
     for s in seeds:
         for _ in range(30):
             F, d, _, _ = grad(s)
-            if not math.isfinite(F):
+            H = hessian(s) if math.isfinite(F) else None
+            if H is None:
                 break
             try:
-                step = -np.linalg.solve(hessian(s), d)
+                step = -np.linalg.solve(H, d)
             except np.linalg.LinAlgError:
                 break
-            # stay in the square: damp a step that would leave it
+            # stay in the square: damp a step that would leave it, and stop where
+            # even the damped one would
             t = 1.0
             while np.any(np.abs(s + t * step) > S) and t > 1e-3:
                 t *= 0.5
+            if np.any(np.abs(s + t * step) > S):
+                break
             s = s + t * step
             if np.linalg.norm(t * step) <= 1e-13 * S:
                 break
-        if math.isfinite(grad(s)[0]) and not any(np.linalg.norm(s - r) <= 1e-6 * S
-                                                  for r in roots):
-            roots.append(s)
-    return roots[count:]
+        if math.isfinite(grad(s)[0]):
+            ends.append(s)
+    return ends
 
 
-def _at_roots(dp, grad, hessian, roots, S) -> list:
-    """The equilibria at Newton's end points that are zeros of ``∇F`` (step 3).
+def _at_roots(dp, grad, hessian, roots, S, known=()) -> list:
+    """The equilibria at Newton's end points that are zeros of ``∇F`` (step 3),
+    merged when closer than 1e-6 S (to each other or to ``known`` amplitudes).
 
     (End points where Newton did not converge, at a kink of F, are left to the
     edge minima: they once also kept the edge minima from reporting a beam
     resting on the obstacle there.)
     """
-    out = []
+    out, have = [], [np.asarray(k, float) for k in known]
     for r in roots:
+        if any(np.linalg.norm(r - h) <= 1e-6 * S for h in have):
+            continue
         F, d, u, ok = grad(r)
         size = sum(abs(v) for v in dp.energy_parts(u).values()) or 1.0
         res = float(np.linalg.norm(d)) * max(float(np.linalg.norm(r)), 1e-3 * S) / size
-        if res > 1e3 * ROOT_TOL:  # Newton did not converge: no zero here
+        H = hessian(r)
+        if res > 1e3 * ROOT_TOL or H is None:  # Newton did not converge: no zero here
             continue
-        eig = np.linalg.eigvalsh(hessian(r))
+        have.append(r)
+        eig = np.linalg.eigvalsh(H)
         w, slope = dp.to_physical(u)
         status = "optimal" if ok and res <= ROOT_TOL else "inaccurate"
         out.append(Equilibrium(float(dp.energy(u) * dp.E0), bool(eig[0] > 0),
@@ -249,16 +272,18 @@ def _zoom_boxes(dp, modes, lo, hi) -> list:
     alone reaches it, when that is less than a quarter of the grid's range.
     """
     peak = np.max(np.abs(modes.phi[dp._w_rows()]), axis=0)
-    dist = [abs(float(np.min(np.abs(dp.g)))), abs(float(np.max(np.abs(dp.g))))]
+    dist = [float(np.min(np.abs(dp.g))), float(np.max(np.abs(dp.g)))]
     if dp.g_above is not None:
         dist.append(float(np.min(dp.g_above)))
         dist.append(float(np.max(dp.g_above)))
-    boxes = []
+    boxes, sizes = [], []
     for d in sorted(set(x for x in dist if x > 0)):
         half = 3.0 * d / np.maximum(peak, 1e-300)
-        if np.all(half < 0.25 * (hi - lo)) and \
-                not any(np.all(half <= 2.0 * b[1]) for b in boxes):
-            boxes.append((np.maximum(lo, -half), np.minimum(hi, half)))
+        a, b = np.maximum(lo, -half), np.minimum(hi, half)
+        if np.all(half < 0.25 * (hi - lo)) and np.all(b > a) and \
+                not any(np.all(half <= 2.0 * h) for h in sizes):
+            boxes.append((a, b))
+            sizes.append(half)
     return boxes
 
 
@@ -300,9 +325,13 @@ def _edge_minima(dp, grad, axes, S, roots, floor, starts=(), step=1e-3) -> list:
     for s0, h in _local_minima(grad, axes) if axes is not None else \
             [(np.asarray(x, float), np.full(2, step * S)) for x in starts]:
         simplex = np.array([s0, s0 + [0.25 * h[0], 0.0], s0 + [0.0, 0.25 * h[1]]])
-        res = so.minimize(f, s0, method="Nelder-Mead",
-                          options=dict(initial_simplex=simplex, xatol=1e-12 * S,
-                                       fatol=0.0, maxiter=400))
+        # (fatol 0 ran every search to maxiter: 5322 of a scene's 5267 solves;
+        # F to 1e-14 of the scale is what the probes below can resolve anyway)
+        with np.errstate(invalid="ignore", over="ignore"):
+            res = so.minimize(f, s0, method="Nelder-Mead",
+                              options=dict(initial_simplex=simplex, xatol=1e-12 * S,
+                                           fatol=1e-14 * (abs(f(s0)) + floor + 1e-300),
+                                           maxiter=400))
         s = np.asarray(res.x, float)
         if not math.isfinite(f(s)) or \
                 any(np.linalg.norm(s - np.asarray(r)) <= 1e-6 * S for r in roots) or \
