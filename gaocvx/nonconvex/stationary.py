@@ -53,6 +53,7 @@ from ..errors import SceneError, SolverError
 from ..scene import check_solve_arguments, numbers_of, whole
 from .bounds import check_bounded, equilibrium_box
 from .equilibrium import Equilibrium
+from .obstacle_checks import check_contact, global_starts
 
 __all__ = ["Equilibrium", "equilibria", "GRID", "MAX_GRID"]
 
@@ -80,6 +81,11 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                fast: bool | None = None) -> list:
     """Every equilibrium of ``scene`` (k <= 2 unstable modes), sorted by energy.
 
+    With one unstable mode the zeros of the reduced gradient are bracketed on a
+    grid; with two the plane of amplitudes is sampled (:mod:`.stationary2`: no
+    proof that none is missed; with an obstacle the certified global minimiser
+    is among the starts).
+
     Parameters
     ----------
     scene : Scene or Mapping
@@ -90,7 +96,7 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         are accepted, ``2.5``, ``"8"`` and bools are not).
     seeds : sequence of float, optional
         Amplitudes [m] (:attr:`Equilibrium.amplitude_m`) to sample besides the
-        grid: a path's previous equilibria.
+        grid: a path's previous equilibria (one unstable mode; two ignore them).
     grid : int
         Grid points over the amplitude range, 2 to :data:`MAX_GRID` (one
         unstable mode; two sample their own ``stationary2.GRID2`` square).
@@ -186,12 +192,12 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
     if modes.k == 2:
         from .stationary2 import find_plane
         out = find_plane(dp, prog, S, floor=scene_energy(dp, modes), modes=modes,
-                         starts=_global_starts(dp, modes) if obstacle else (), box=(lo, hi))
+                         starts=global_starts(dp, modes) if obstacle else (), box=(lo, hi))
     else:
         out = _find(dp, prog, S, np.asarray(seeds, float) / dp.W, grid, float(lo[0]),
                     float(hi[0]), scene_energy(dp, modes))
         if not fast and obstacle:
-            _check_contact(dp, prog, out)
+            check_contact(dp, prog, out)
     if out and all(e is not None for e in out):
         return out
     # A zero of F' whose slice failed, or no equilibrium at all (the global
@@ -206,86 +212,6 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
     raise SolverError("equilibria: the reduced function's solve failed at a zero of F' "
                       "(or no equilibrium was found); no list of equilibria is given",
                       "error")
-
-
-def _global_starts(dp, modes) -> list:
-    """The certified global minimiser's amplitudes (and its images'), in ``dp``'s units.
-
-    With two modes and an obstacle the plane's sampling is no proof; the global
-    minimum, an equilibrium, is then certain to be among the starts (a trial's
-    P1 and P2 beams in channels: the global minimum was missed in 3 of 40 scenes).
-    A failed or uncertified solve gives no start (the sampling stands alone).
-    """
-    from .minimum import solve_global
-    try:
-        dpg, raw, info = solve_global(dp, modes)
-    except (SceneError, SolverError, ArithmeticError, np.linalg.LinAlgError) as exc:
-        # (only a start: the sampling goes on without it)
-        log.warning("equilibria: no global minimiser to start from (%s)", exc)
-        return []
-    if raw.get("status") != "optimal":
-        return []
-    r = dpg.W / dp.W
-    return [np.asarray(a["amplitudes"], float) * r for a in [info] + info["alternatives"]]
-
-
-def _check_contact(dp, prog, out) -> None:
-    """The dense programs' equilibria with an obstacle: ``optimal`` only at a KKT point.
-
-    The residual ``|F'| |s|`` cannot see a wrong deflection: on 40 campaign
-    scenes the dense programs called 10 deflections optimal that are no KKT
-    point of the independent energy (stationarity up to 5e5 at gap 0, a beam
-    pressed flat returned as 3e-12 m).  One that fails :func:`kkt_point`
-    becomes ``inaccurate``.
-    """
-    for e in out:
-        if e is None or e.status != "optimal":
-            continue
-        if not kkt_point(dp, prog, e.amplitudes):
-            log.info("equilibria: the dense programs' equilibrium at s = %s is no KKT "
-                     "point: inaccurate", e.amplitudes)
-            e.status = "inaccurate"
-
-
-def kkt_point(dp, prog, s) -> bool:
-    """Whether the beam of the slice at amplitudes ``s`` passes the global method's
-    optimality conditions with an obstacle (stationarity of the Lagrangian in the
-    convex part's metric, feasibility, the multipliers' sign, complementarity).
-
-    The slice is solved again for its own multipliers.  The dense programs'
-    (:class:`.node.NodeProgram`) are checked in the Hermite DOFs
-    (:func:`.certificate.certify_contact`: the program's multipliers and those
-    recomputed on the touching rows), the contact slices' in the mixed form
-    (:func:`.fast_check.certify_contact`, the slice's multipliers) or else as
-    the dense programs'.  A beam pressed flat at gap 0 passes neither (measured:
-    stationarity 1e5 and 3e6 where the independent check measured 4e-13): it
-    is then ``inaccurate``, which errs on the safe side.
-    """
-    from ..certificate import passes
-    from ..mixed import MixedForm
-    from .certificate import certify_contact
-    from .polish import to_mixed
-
-    _, _, u, ok = prog.reduced(np.asarray(s, float))
-    if u is None or not ok:
-        return False
-    fast = getattr(prog, "prog", None)
-    if fast is not None and hasattr(fast, "certify"):    # ContactSlices
-        mf = fast.mf
-        floor = mf.zero_floor if mf.has_load else 0.0
-        residual, _ = fast.certify(to_mixed(mf, u), prog.lam, floor)
-        if passes(residual):
-            return True
-        # (at a kink of F the slice's multipliers balance the amplitude rows too:
-        # those recomputed on the touching rows may still pass)
-        modes, lam, rows, levels = fast.modes, prog.lam, fast.rows, fast.levels
-    else:
-        mf = MixedForm.on_obstacle(dp)
-        floor = mf.zero_floor if mf.has_load else 0.0
-        modes, lam, rows, levels = prog.modes, prog.obstacle_multipliers(), prog.rows, \
-            prog.levels
-    residual, _ = certify_contact(dp, modes, u, lam, rows, levels, floor)
-    return passes(residual)
 
 
 def _classify(dF, r, h) -> tuple:

@@ -14,7 +14,7 @@ every zero is found, so this search is a careful sampling, not a proof:
    seeds Newton's method on ``∇F = 0`` (the Hessian of F by central
    differences of the envelope gradient), damped to stay in the square, and
    so do ``s = 0`` and the given starts (with an obstacle: the certified global
-   minimiser's amplitudes, :func:`.stationary._global_starts`);
+   minimiser's amplitudes, :func:`.obstacle_checks.global_starts`);
 3. zeros are merged when closer than 1e-6 S; each is classified by the
    eigenvalues of its Hessian: both positive is a local minimum of the energy
    (stable), else unstable (a saddle or a maximum of F);
@@ -223,9 +223,9 @@ def _certify(dp, prog, out) -> None:
 
     The residuals above (``|∇F|`` times a radius) cannot see a deflection that
     is no equilibrium of the beam; the optimality conditions are checked as the
-    global method's answers are (:func:`.stationary.kkt_point`).
+    global method's answers are (:func:`.obstacle_checks.kkt_point`).
     """
-    from .stationary import kkt_point
+    from .obstacle_checks import kkt_point
 
     for e in out:
         if e.status == "optimal" and not kkt_point(dp, prog, e.amplitudes):

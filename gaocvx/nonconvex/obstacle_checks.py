@@ -1,0 +1,101 @@
+"""Equilibria with an obstacle: the optimality conditions behind ``optimal``, and
+the certified global minimiser as a start.
+
+The reduced function's residuals (``|F'|`` times an amplitude) cannot see a
+deflection that is no equilibrium of the beam; :func:`kkt_point` checks the
+global method's optimality conditions on it.  With two unstable modes the
+plane of amplitudes is only sampled (:mod:`.stationary2`): the certified
+global minimiser, an equilibrium, is among its starts (:func:`global_starts`).
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from ..errors import SceneError, SolverError
+
+__all__ = ["check_contact", "global_starts", "kkt_point"]
+
+log = logging.getLogger(__name__)
+
+
+def global_starts(dp, modes) -> list:
+    """The certified global minimiser's amplitudes (and its images'), in ``dp``'s units.
+
+    With two modes and an obstacle the plane's sampling is no proof; the global
+    minimum, an equilibrium, is then certain to be among the starts (a trial's
+    P1 and P2 beams in channels: the global minimum was missed in 3 of 40 scenes).
+    A failed or uncertified solve gives no start (the sampling stands alone).
+    """
+    from .minimum import solve_global
+    try:
+        dpg, raw, info = solve_global(dp, modes)
+    except (SceneError, SolverError, ArithmeticError, np.linalg.LinAlgError) as exc:
+        # (only a start: the sampling goes on without it)
+        log.warning("equilibria: no global minimiser to start from (%s)", exc)
+        return []
+    if raw.get("status") != "optimal":
+        return []
+    r = dpg.W / dp.W
+    return [np.asarray(a["amplitudes"], float) * r for a in [info] + info["alternatives"]]
+
+
+def check_contact(dp, prog, out) -> None:
+    """The dense programs' equilibria with an obstacle: ``optimal`` only at a KKT point.
+
+    The residual ``|F'| |s|`` cannot see a wrong deflection: on 40 campaign
+    scenes the dense programs called 10 deflections optimal that are no KKT
+    point of the independent energy (stationarity up to 5e5 at gap 0, a beam
+    pressed flat returned as 3e-12 m).  One that fails :func:`kkt_point`
+    becomes ``inaccurate``.
+    """
+    for e in out:
+        if e is None or e.status != "optimal":
+            continue
+        if not kkt_point(dp, prog, e.amplitudes):
+            log.info("equilibria: the dense programs' equilibrium at s = %s is no KKT "
+                     "point: inaccurate", e.amplitudes)
+            e.status = "inaccurate"
+
+
+def kkt_point(dp, prog, s) -> bool:
+    """Whether the beam of the slice at amplitudes ``s`` passes the global method's
+    optimality conditions with an obstacle (stationarity of the Lagrangian in the
+    convex part's metric, feasibility, the multipliers' sign, complementarity).
+
+    The slice is solved again for its own multipliers.  The dense programs'
+    (:class:`.node.NodeProgram`) are checked in the Hermite DOFs
+    (:func:`.certificate.certify_contact`: the program's multipliers and those
+    recomputed on the touching rows), the contact slices' in the mixed form
+    (:func:`.fast_check.certify_contact`, the slice's multipliers) or else as
+    the dense programs'.  A beam pressed flat at gap 0 passes neither (measured:
+    stationarity 1e5 and 3e6 where the independent check measured 4e-13): it
+    is then ``inaccurate``, which errs on the safe side.
+    """
+    from ..certificate import passes
+    from ..mixed import MixedForm
+    from .certificate import certify_contact
+    from .polish import to_mixed
+
+    _, _, u, ok = prog.reduced(np.asarray(s, float))
+    if u is None or not ok:
+        return False
+    fast = getattr(prog, "prog", None)
+    if fast is not None and hasattr(fast, "certify"):    # ContactSlices
+        mf = fast.mf
+        floor = mf.zero_floor if mf.has_load else 0.0
+        residual, _ = fast.certify(to_mixed(mf, u), prog.lam, floor)
+        if passes(residual):
+            return True
+        # (at a kink of F the slice's multipliers balance the amplitude rows too:
+        # those recomputed on the touching rows may still pass)
+        modes, lam, rows, levels = fast.modes, prog.lam, fast.rows, fast.levels
+    else:
+        mf = MixedForm.on_obstacle(dp)
+        floor = mf.zero_floor if mf.has_load else 0.0
+        modes, lam, rows, levels = prog.modes, prog.obstacle_multipliers(), prog.rows, \
+            prog.levels
+    residual, _ = certify_contact(dp, modes, u, lam, rows, levels, floor)
+    return passes(residual)
