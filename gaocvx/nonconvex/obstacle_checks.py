@@ -43,20 +43,21 @@ def global_starts(dp, modes) -> list:
 
 
 def check_contact(dp, prog, out) -> None:
-    """The dense programs' equilibria with an obstacle: ``optimal`` only at a KKT point.
+    """Equilibria with an obstacle: ``optimal`` only at a KKT point (``out`` in place).
 
-    The residual ``|F'| |s|`` cannot see a wrong deflection: on 40 campaign
-    scenes the dense programs called 10 deflections optimal that are no KKT
-    point of the independent energy (stationarity up to 5e5 at gap 0, a beam
-    pressed flat returned as 3e-12 m).  One that fails :func:`kkt_point`
-    becomes ``inaccurate``.
+    The reduced function's residuals (``|F'| |s|``, or ``|∇F|`` times a radius)
+    cannot see a wrong deflection: on 40 campaign scenes the dense programs
+    called 10 deflections optimal that are no KKT point of the independent
+    energy (stationarity up to 5e5 at gap 0, a beam pressed flat returned as
+    3e-12 m).  One that fails :func:`kkt_point` becomes ``inaccurate``.  Used
+    for the dense programs with one unstable mode and for every search with two.
     """
     for e in out:
         if e is None or e.status != "optimal":
             continue
         if not kkt_point(dp, prog, e.amplitudes):
-            log.info("equilibria: the dense programs' equilibrium at s = %s is no KKT "
-                     "point: inaccurate", e.amplitudes)
+            log.info("equilibria: the equilibrium at s = %s is no KKT point: inaccurate",
+                     e.amplitudes)
             e.status = "inaccurate"
 
 

@@ -30,7 +30,7 @@ every zero is found, so this search is a careful sampling, not a proof:
 5. with an obstacle, the mirror images (x -> L - x) of the equilibria found,
    where mesh and supports are symmetric, seed steps 2 and 4 again, and every
    equilibrium called ``optimal`` must pass the global method's optimality
-   conditions (:func:`_certify`), else it is ``inaccurate``.
+   conditions (:func:`.obstacle_checks.check_contact`), else it is ``inaccurate``.
 
 Examples
 --------
@@ -53,6 +53,7 @@ import time
 import numpy as np
 
 from .equilibrium import Equilibrium
+from .obstacle_checks import check_contact
 from .stationary import ROOT_TOL
 
 __all__ = ["find_plane", "GRID2"]
@@ -137,7 +138,7 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
         if images:
             out += _at_roots(dp, grad, hessian, _newton(grad, hessian, images, S), S, found())
             out += _edge_minima(dp, grad, None, S, found(), floor, images)
-        _certify(dp, prog, out)
+        check_contact(dp, prog, out)
     out.sort(key=lambda e: e.energy)
     log.info("equilibria (k = 2): %d found from %d seeds, %d solves in %.2f s", len(out),
              len(seeds), len(cache), time.perf_counter() - t0)
@@ -189,8 +190,10 @@ def _at_roots(dp, grad, hessian, roots, S, known=()) -> list:
         F, d, u, ok = grad(r)
         size = sum(abs(v) for v in dp.energy_parts(u).values()) or 1.0
         res = float(np.linalg.norm(d)) * max(float(np.linalg.norm(r)), 1e-3 * S) / size
+        if res > 1e3 * ROOT_TOL:  # Newton did not converge: no zero here
+            continue
         H = hessian(r)
-        if res > 1e3 * ROOT_TOL or H is None:  # Newton did not converge: no zero here
+        if H is None:
             continue
         have.append(r)
         eig = np.linalg.eigvalsh(H)
@@ -216,22 +219,6 @@ def _images(dp, modes, grad, out, S) -> list:
             if not any(np.linalg.norm(s - h) <= 1e-6 * S for h in have + images):
                 images.append(s)
     return images
-
-
-def _certify(dp, prog, out) -> None:
-    """Each ``optimal`` equilibrium with an obstacle: a KKT point, else ``inaccurate``.
-
-    The residuals above (``|∇F|`` times a radius) cannot see a deflection that
-    is no equilibrium of the beam; the optimality conditions are checked as the
-    global method's answers are (:func:`.obstacle_checks.kkt_point`).
-    """
-    from .obstacle_checks import kkt_point
-
-    for e in out:
-        if e.status == "optimal" and not kkt_point(dp, prog, e.amplitudes):
-            log.info("equilibria: the equilibrium at s = %s is no KKT point: inaccurate",
-                     e.amplitudes)
-            e.status = "inaccurate"
 
 
 def _grid_seeds(grad, axes) -> list:
