@@ -342,14 +342,53 @@ TRIAL_MISSES = [
 ]
 
 
+# Stable equilibria in narrow valleys of F (channels), missed by the grid's cells
+# and Newton's method until the zero curves of one gradient component were
+# followed (gaocvx/nonconvex/contours.py); energies from the trial's independent
+# multi-start (SLSQP on this file's energy, polished, KKT and second order).
+CURVE_MISSES = [
+    pytest.param(   # P2 pressed onto the upper wall: a contact variant 2 J above a listed one
+        "P2", {}, {"q": [[0.0, -13709.236722265015], [0.8592463806945426, -183561.32639273469],
+                         [1.0, -48128.51782721932]], "axial": 12506666473.86398},
+        {"gap": 0.0005114722483966589, "gap_above": 0.0020167654471801616}, 12,
+        [-147447.581098], id="P2-channel-variant"),
+    pytest.param(   # P1, table load, in a 1.8 cm channel: three stable equilibria on one wall
+        "P1", {"length": 1.3156629065792407, "nu": 0.2566669171897021,
+               "half_thickness": 0.14877741699091868},
+        {"q": [[0.0, -93513728.33597532], [1.0468988438390385, -93010977.98186761],
+               [1.3156629065792407, -5832819.404762596]], "axial": 24844874791.174957},
+        {"gap": 0.0741224852962095, "gap_above": 0.017667984498182614}, 12,
+        [-10313931.4379, -10313608.4095, -10310878.2724], id="P1-channel-valley",
+        marks=pytest.mark.slow),
+    pytest.param(   # P2, point loads, 2 mm channel: two minima 0.03 S apart on one floor
+        "P2", {}, {"points": [[0.2650736766007938, -141690.3637386594],
+                              [0.07605017265531924, -550571.6779293197]],
+                   "axial": 12087146972.309824},
+        {"gap": 0.008736285049580158, "gap_above": 0.002057260007742304}, 24,
+        [-2628728.18814, -2628724.16726], id="P2-channel-pair", marks=pytest.mark.slow),
+]
+
+
 @pytest.mark.parametrize("load, obstacle, elements, missed", TRIAL_MISSES)
 def test_two_modes_on_an_obstacle_list_the_trials_stable_equilibria(load, obstacle, elements,
                                                                     missed):
     """Every listed equilibrium passes the independent check, and the stable
     equilibria the trial found independently are among them."""
+    _lists_the_stable("P2", {}, load, obstacle, elements, missed)
+
+
+@pytest.mark.parametrize("supports, beam, load, obstacle, elements, missed", CURVE_MISSES)
+def test_two_modes_in_a_channel_find_the_stable_equilibria_in_narrow_valleys(
+        supports, beam, load, obstacle, elements, missed):
+    """As above, for the trial's misses in narrow valleys (before the zero curves
+    of one gradient component were followed, none of these was listed)."""
+    _lists_the_stable(supports, beam, load, obstacle, elements, missed)
+
+
+def _lists_the_stable(supports, beam, load, obstacle, elements, missed):
     from conftest import scene_dict
     from gaocvx import Scene
-    d = scene_dict("P2", q=None, elements=elements)
+    d = scene_dict(supports, q=None, elements=elements, **beam)
     d["load"].update(load)
     d["obstacle"] = obstacle
     scene = Scene.from_dict(d)

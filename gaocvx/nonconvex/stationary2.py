@@ -15,6 +15,9 @@ every zero is found, so this search is a careful sampling, not a proof:
    differences of the envelope gradient), damped to stay in the square, and
    so do ``s = 0`` and the given starts (with an obstacle: the certified global
    minimiser's amplitudes, :func:`.obstacle_checks.global_starts`);
+   With an obstacle or channel, also the zeros found by following the zero
+   curves of one component of ``∇F`` across each grid (:mod:`.contours`:
+   narrow valleys, where Newton's method does not converge from a cell);
 3. zeros are merged when closer than 1e-6 S; each is classified by the
    eigenvalues of its Hessian: both positive is a local minimum of the energy
    (stable), else unstable (a saddle or a maximum of F);
@@ -52,6 +55,7 @@ import time
 
 import numpy as np
 
+from .contours import curve_zeros
 from .equilibrium import Equilibrium
 from .obstacle_checks import check_contact
 from .stationary import ROOT_TOL
@@ -120,7 +124,12 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
         seeds += _grid_seeds(grad, axes)
     if math.isfinite(grad(np.zeros(2))[0]):
         seeds.insert(0, np.zeros(2))   # the unloaded beam's trivial equilibrium, if any
-    out = _at_roots(dp, grad, hessian, _newton(grad, hessian, seeds, S), S)
+    ends = _newton(grad, hessian, seeds, S)
+    if dp.contact == "obstacle":
+        # zeros in narrow valleys, where Newton's method does not converge from
+        # a grid cell (:mod:`.contours`)
+        ends += [z for axes in grids for z in curve_zeros(grad, axes, S)]
+    out = _at_roots(dp, grad, hessian, ends, S)
     if dp.contact == "obstacle":
         def found():
             return [np.asarray(e.amplitudes) for e in out]
