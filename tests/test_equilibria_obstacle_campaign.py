@@ -427,6 +427,24 @@ def test_one_mode_in_a_channel_of_1e_8_m_calls_no_failed_slice_an_edge():
     assert any(not c["kkt"] for _, c in verdicts)     # the fake edge's beam, listed inaccurate
 
 
+def test_one_mode_classified_from_probes_closer_than_the_next_zero():
+    """A campaign at extreme scales: P2, 10 cm, no load, a stiff bed 8.4e-10 m
+    below.  The beam buckled 9.8e-10 m down into the bed lies 1.8e-6 S from
+    w = 0 and was called unstable from probes 3e-6 S wide that straddled w = 0;
+    independently it is a strict local minimum.  All three listed: checked."""
+    from gaocvx import Scene
+    scene = Scene.from_dict({
+        "beam": {"model": "gao", "supports": "P2", "length": 0.09925667010097562,
+                 "E": 223782752183.19104, "nu": 0.46590535649735654,
+                 "half_thickness": 0.0007870682637173876, "width": 0.5302119921692052},
+        "load": {"axial": 164195.05773119547}, "mesh": {"elements": 24},
+        "foundation": {"gap": 8.389293499077842e-10, "stiffness": 2699624406.5809174}})
+    eqs = equilibria(scene)
+    assert len(eqs) == 3 and all(e.status == "optimal" for e in eqs)
+    _checked(scene, eqs)
+    assert [e.stable for e in eqs] == [True, True, False]
+
+
 def test_two_modes_pressed_flat_at_gap_zero_is_no_traceback():
     """P4 at gap 0, two modes: the Newton step from the flat beam took F = inf
     beyond the obstacle's edge for a slope (a step of 6e11, a singular KKT

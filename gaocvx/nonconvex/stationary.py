@@ -346,7 +346,12 @@ def _find(dp, prog, S, seeds, grid, lo, hi, floor):
             log.warning("equilibria: no admissible slice at the zero s = %.17g", r)
             out.append(None)   # (the caller's: the list is incomplete)
             continue
-        stable, curvature = _classify(dF, r, 1e-6 * S)
+        # (probes closer than the nearest other zero: a P2 beam 9.8e-10 m into a
+        # bed 8.4e-10 m below, 1.8e-6 S from w = 0, was called unstable from
+        # probes 3e-6 S wide that straddled w = 0 -- an extreme-scale campaign)
+        # (other zeros only: an edge's probe beyond it counts as rising anyway)
+        near = [abs(q - r) for q in set(roots) if q != r]
+        stable, curvature = _classify(dF, r, min([1e-6 * S] + [0.25 * q for q in near]))
         w, slope = dp.to_physical(u)
         # |F'| times the amplitude: the work of the residual force, relative to
         # the equilibrium's energy scale (w = 0: the amplitude range's thousandth)
