@@ -366,6 +366,13 @@ CURVE_MISSES = [
                    "axial": 12087146972.309824},
         {"gap": 0.008736285049580158, "gap_above": 0.002057260007742304}, 24,
         [-2628728.18814, -2628724.16726], id="P2-channel-pair", marks=pytest.mark.slow),
+    pytest.param(   # P1, point loads, 1 cm channel: a pair 0.1 S apart next to the line
+        # s = 0, whose neighbour line 0.002 S away hid it from the refinement
+        "P1", {}, {"points": [[0.6155846757476983, -5150658.721119596],
+                              [0.8057555623890161, -6834354.998981968]],
+                   "axial": 15855215010.430601},
+        {"gap": 0.01949474682276539, "gap_above": 0.0104996072417108}, 16,
+        [-3736034.02854], id="P1-channel-beside-zero", marks=pytest.mark.slow),
 ]
 
 
