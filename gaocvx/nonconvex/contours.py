@@ -23,8 +23,10 @@ curve is sampled on finer lines on both sides, twice over.  Only ``F``'s
 gradient is used, continuous where the contact changes (the envelope of a
 convex program, where its multipliers are unique); no Hessian is needed.
 Still a sampling: a curve that leaves between two grid lines and comes back,
-a pair matched across two curves, or zeros closer than the finest lines can
-be missed.  It costs about 1500-6500 more solves per scene (12-24 elements).
+a pair matched across two curves, zeros closer than the finest lines, or a
+zero between the last admissible grid point and the edge of the admissible
+amplitudes (both ends of a bracket must be admissible) can be missed.  It
+costs about 1500-9000 more solves per scene (10-24 elements, measured).
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import scipy.optimize as so
 
 __all__ = ["curve_zeros"]
 
@@ -39,14 +42,31 @@ __all__ = ["curve_zeros"]
 def curve_zeros(grad, axes, S, fine: int = 8) -> list:
     """Zeros of ``∇F`` on the zero curves of ``∂F/∂s_0`` and ``∂F/∂s_1`` (see the module).
 
-    ``grad(s) -> (F, ∇F, u, ok)`` (``F = inf`` at inadmissible amplitudes),
-    ``axes``: the grid's two axes, ``S``: the amplitudes' scale.  Where ``|∂F/∂s_i|``
+    Parameters
+    ----------
+    grad : callable
+        ``grad(s) -> (F, ∇F, u, ok)`` (``F = inf`` at inadmissible amplitudes;
+        cached by the caller: grid points cost nothing again).
+    axes : pair of ndarray
+        The grid's two axes.
+    S : float
+        The amplitudes' scale (tolerances are relative to it).
+    fine : int
+        Lines sampled between two of the grid's where a curve is refined.
+
+    Returns
+    -------
+    list of ndarray
+        Amplitudes found, not yet classified nor merged
+        (:func:`.stationary2._at_roots` checks their residual).
+
+    Notes
+    -----
+    Where ``|∂F/∂s_i|``
     along a curve is smallest at a grid line without changing sign (two zeros
     close together: a P2 beam in a channel has two minima and a saddle within
     0.03 S on one valley floor, the lines 0.34 S apart), the curve is sampled
-    on ``fine`` lines between its neighbours too.  Returns the amplitudes
-    found (not yet classified: :func:`.stationary2._at_roots` checks their
-    residual).
+    on ``fine`` lines between its neighbours too.
     """
     out = []
     for j in range(2):
@@ -126,12 +146,14 @@ def _between(grad, j, p0, p1, step, S, fine) -> list:
 
 
 def _point(j, a, c) -> np.ndarray:
+    """The amplitudes with ``s_j = a`` and the other ``c``."""
     s = np.empty(2)
     s[j], s[1 - j] = a, c
     return s
 
 
 def _component(grad, j, a, c, which):
+    """``∂F/∂s_which`` at :func:`_point` ``(j, a, c)``, NaN where inadmissible."""
     F, d, _, _ = grad(_point(j, a, c))
     return float(d[which]) if math.isfinite(F) else math.nan
 
@@ -176,6 +198,12 @@ def _crossing(grad, j, p0, p1, step, S):
             return _point(j, a, c)
 
     def h(c):
+        # (the ends' own values: a curve point found again at c0 or c1 within the
+        # bracket may lie on another curve, and Brent's method would then stop)
+        if c == p0[0]:
+            return p0[2]
+        if c == p1[0]:
+            return p1[2]
         q = _on_curve(grad, j, p0, p1, c, step, S)
         return math.nan if q is None else q[2]
 
@@ -192,8 +220,6 @@ def _root(f, a, b, fa, fb, S, xtol=1e-13):
     """A root of ``f`` in ``[a, b]`` (``fa``, ``fb``: values of opposite signs) by
     Brent's method to ``xtol * S``; None where ``f`` turns non-finite (``grad``
     is cached: the ends cost nothing again)."""
-    import scipy.optimize as so
-
     if fa == 0.0:
         return a
     if fb == 0.0:

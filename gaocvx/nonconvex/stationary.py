@@ -310,14 +310,16 @@ def _find(dp, prog, S, seeds, grid, lo, hi, floor):
             if res.fun < 0:
                 refine(s_arr[i - 1], res.x)
                 refine(res.x, s_arr[i + 1])
+
     def at_an_end(t):
         # With one mode the admissible amplitudes are the interval [lo, hi] (the
-        # linear program's, to its tolerance): F = inf strictly inside it is a
-        # failed slice, no edge.  (A P1 beam in a channel 1.2e-8 m high, 6
-        # elements: slices failing inside the range made a fake edge, reported
-        # as an `optimal` stable equilibrium where a feasible step lowers the
-        # energy by 4 % -- a campaign at extreme scales.)
-        tol = 1e-6 * (hi - lo)
+        # linear program's, widened by fast_check.RANGE_PAD relative): F = inf
+        # strictly inside it is a failed slice, no edge.  (A P1 beam in a channel
+        # 1.2e-8 m high, 6 elements: slices failing inside the range made a fake
+        # edge, reported as an `optimal` stable equilibrium where a feasible step
+        # lowers the energy by 4 % -- a campaign at extreme scales.)
+        from .fast_check import RANGE_PAD
+        tol = max(1e-6 * (hi - lo), 4.0 * RANGE_PAD * (1.0 + max(abs(lo), abs(hi))))
         return t <= lo + tol or t >= hi - tol
 
     out = []
@@ -349,9 +351,14 @@ def _find(dp, prog, S, seeds, grid, lo, hi, floor):
         # (probes closer than the nearest other zero: a P2 beam 9.8e-10 m into a
         # bed 8.4e-10 m below, 1.8e-6 S from w = 0, was called unstable from
         # probes 3e-6 S wide that straddled w = 0 -- an extreme-scale campaign)
-        # (other zeros only: an edge's probe beyond it counts as rising anyway)
-        near = [abs(q - r) for q in set(roots) if q != r]
-        stable, curvature = _classify(dF, r, min([1e-6 * S] + [0.25 * q for q in near]))
+        # (other zeros only, beyond the merging distance: an edge's probe beyond
+        # it counts as rising anyway)
+        near = [abs(q - r) for q in set(roots) if abs(q - r) > 1e-9 * S]
+        h = max(min([1e-6 * S] + [0.25 * q for q in near]), 1e-10 * S)
+        stable, curvature = _classify(dF, r, h)
+        # (an inadmissible probe counts as rising only at an end of the range:
+        # inside it the slice failed, and the stability is not known)
+        undecided = any(not math.isfinite(dF(t)[0]) and not at_an_end(t) for t in (r - h, r + h))
         w, slope = dp.to_physical(u)
         # |F'| times the amplitude: the work of the residual force, relative to
         # the equilibrium's energy scale (w = 0: the amplitude range's thousandth)
@@ -386,7 +393,7 @@ def _find(dp, prog, S, seeds, grid, lo, hi, floor):
                     res = min(res, abs((b if fb else a)[1]) * e / size)
                     stable = True
                     break
-        status = "optimal" if ok and res <= ROOT_TOL else "inaccurate"
+        status = "optimal" if ok and res <= ROOT_TOL and not undecided else "inaccurate"
         out.append(Equilibrium(float(dp.energy(u) * dp.E0), bool(stable), [float(r)], dp.x.copy(),
                                w, slope, float(res), status, float(dp.P), float(curvature),
                                float(dp.W)))

@@ -15,7 +15,7 @@ every zero is found, so this search is a careful sampling, not a proof:
    differences of the envelope gradient), damped to stay in the square, and
    so do ``s = 0`` and the given starts (with an obstacle: the certified global
    minimiser's amplitudes, :func:`.obstacle_checks.global_starts`);
-   With an obstacle or channel, also the zeros found by following the zero
+   with an obstacle or channel, also the zeros found by following the zero
    curves of one component of ``∇F`` across each grid (:mod:`.contours`:
    narrow valleys, where Newton's method does not converge from a cell);
 3. zeros are merged when closer than 1e-6 S; each is classified by the
@@ -79,6 +79,8 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
     finer grids span the boxes where the unstable modes reach the obstacle
     (:func:`_zoom_boxes`, from ``modes``); ``starts`` (amplitudes: the
     certified global minimiser's) seed Newton's method and the edge minima.
+    With an obstacle the zeros on the zero curves of one component of ``∇F``
+    are added on every grid (:func:`.contours.curve_zeros`).
     """
     t0 = time.perf_counter()
     cache = {}
