@@ -449,6 +449,34 @@ def test_one_mode_flat_beam_at_gap_zero_in_a_channel_is_optimal():
     assert [(e.stable, e.status) for e in eqs] == [(True, "optimal")]
 
 
+def test_one_mode_says_when_slices_fail_inside_the_range(caplog):
+    """A P4 beam in a channel 3.8e-6 m high (extreme-scale campaign): the slices
+    fail over most of the admissible range, where an independent multi-start
+    finds a stable beam held at the ceiling (-1.0234e-4 J) that the list lacks.
+    The list must say that it may be incomplete."""
+    import logging
+    from gaocvx import Scene
+    scene = Scene.from_dict({
+        "beam": {"model": "gao", "supports": "P4", "length": 0.5969923084067551,
+                 "E": 375336533383.62714, "nu": 0.36142663188341817,
+                 "half_thickness": 0.009963500187270278, "width": 0.18382426513721897},
+        "load": {"q": [[0.0, -0.004670091843233421], [0.3654313608415804, -0.0014919900155425932],
+                       [0.5969923084067551, -1.123436662841685e-05]],
+                 "axial": 2464831.300487298},
+        "mesh": {"elements": 4},
+        "obstacle": {"gap": [[0.0, 2.2628962206724234e-05], [0.4984427792162352, 6.697295662187578e-05],
+                             [0.5969923084067551, 1.3623756991170315]],
+                     "gap_above": 3.820017674616131e-06}})
+    with caplog.at_level(logging.WARNING, logger="gaocvx"):
+        eqs = equilibria(scene)
+    if not any(abs(e.energy + 1.0234188354e-4) <= 1e-8 for e in eqs):
+        assert "may be missing from the list" in caplog.text
+    for e in eqs:
+        if e.status == "optimal":
+            c = check(scene, e, np.random.default_rng(0))
+            assert not c["violations"] and c["kkt"], c
+
+
 def test_one_mode_classified_from_probes_closer_than_the_next_zero():
     """A campaign at extreme scales: P2, 10 cm, no load, a stiff bed 8.4e-10 m
     below.  The beam buckled 9.8e-10 m down into the bed lies 1.8e-6 S from
