@@ -194,8 +194,17 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         out = find_plane(dp, prog, S, floor=scene_energy(dp, modes), modes=modes,
                          starts=global_starts(dp, modes) if obstacle else (), box=(lo, hi))
     else:
-        out = _find(dp, prog, S, np.asarray(seeds, float) / dp.W, grid, float(lo[0]),
-                    float(hi[0]), scene_energy(dp, modes))
+        points = np.asarray(seeds, float) / dp.W
+        if obstacle:
+            # finer grids where the mode reaches a surface of the obstacle, as
+            # with two modes (a P3 beam held at a ceiling 1.8e-5 m up, 48 elements:
+            # that stable equilibrium and an unstable one lay within one step of
+            # the grid over S = 82 times the amplitude there -- extreme-scale campaign)
+            from .stationary2 import _zoom_boxes
+            points = np.concatenate([points] + [np.linspace(a[0], b[0], grid)
+                                                for a, b in _zoom_boxes(dp, modes, lo, hi)])
+        out = _find(dp, prog, S, points, grid, float(lo[0]), float(hi[0]),
+                    scene_energy(dp, modes))
         if not fast and obstacle:
             check_contact(dp, prog, out)
     if out and all(e is not None for e in out):
