@@ -167,7 +167,10 @@ def test_two_unstable_modes_with_an_obstacle():
     beam resting on the obstacle just off the middle and its mirror image (both
     stable), two mirror unstable ones and a slightly bent unstable one.  (The
     search once listed two, with the dense programs agreeing: the three near the
-    obstacle lie within the coarse grid's step of each other.)"""
+    obstacle lie within the coarse grid's step of each other.)  Since the zero
+    curves are followed, the dense programs also list the saddle at s2 = 0
+    between the resting pair (independently an unstable KKT point), which the
+    contact slices miss: the fast list must be part of the dense one."""
     from test_equilibria_obstacle_campaign import _checked
     scene = Scene.from_dict(scene_dict("P1", q=-5e7, axial=1.1e10, obstacle=0.01, elements=16))
     dense, fast = equilibria(scene, fast=False), equilibria(scene, fast=True)
@@ -176,8 +179,9 @@ def test_two_unstable_modes_with_an_obstacle():
     assert len(fast) == 6 and sum(e.stable for e in fast) == 3
     resting = [e for e in fast if e.stable and abs(e.min["w"] + 0.01) < 1e-9]
     assert len(resting) == 2 and np.allclose(resting[0].w, resting[1].w[::-1], atol=1e-9)
-    assert len(dense) == len(fast)
+    _checked(scene, dense)
     scale = max(abs(e.energy) for e in dense)
-    for f, e in zip(fast, dense):
-        assert f.stable == e.stable
-        assert abs(f.energy - e.energy) <= 1e-8 * max(abs(e.energy), 1e-6 * scale)
+    for f in fast:
+        assert any(f.stable == e.stable and
+                   abs(f.energy - e.energy) <= 1e-8 * max(abs(e.energy), 1e-6 * scale)
+                   for e in dense), f.energy
