@@ -31,7 +31,7 @@ import numpy as np
 
 from ..errors import SceneError
 
-__all__ = ["t_max", "amplitude_box", "equilibrium_box", "check_bounded"]
+__all__ = ["t_max", "amplitude_box", "equilibrium_box", "check_bounded", "zoom_boxes"]
 
 
 def t_max(a: float, p: float, c0: float, upper: float) -> float:
@@ -147,3 +147,32 @@ def equilibrium_box(dp, lam1: float) -> float:
         t = (B + math.sqrt(B * B + 4.0 * A * C)) / (2.0 * A)
         best = min(best, max(t, 0.0))
     return math.sqrt(best) * (1.0 + 1e-9)
+
+
+def zoom_boxes(dp, modes, lo, hi) -> list:
+    """Boxes of amplitudes in which the unstable modes reach the obstacle.
+
+    A beam held by an obstacle 1.6 cm below, buckled 21 cm by itself, has its
+    equilibria on the obstacle within 8 % of the amplitudes' range: the 25 x 25
+    grid's step.  A trial found stable equilibria missed in 19 of 40 scenes with
+    two modes and an obstacle or channel (P2 resting on an obstacle, P1 in
+    channels, P4 on obstacles 0.05-0.2 mm below).  For each distance of the
+    obstacle's surfaces from the beam (the nearest and the farthest point of
+    each), the box of half-width three times the amplitude at which a mode
+    alone reaches it, when that is less than a quarter of the grid's range.
+    Used by both searches (:mod:`.stationary`, one mode; :mod:`.stationary2`).
+    """
+    peak = np.max(np.abs(modes.phi[dp._w_rows()]), axis=0)
+    dist = [float(np.min(np.abs(dp.g))), float(np.max(np.abs(dp.g)))]
+    if dp.g_above is not None:
+        dist.append(float(np.min(dp.g_above)))
+        dist.append(float(np.max(dp.g_above)))
+    boxes, sizes = [], []
+    for d in sorted(set(x for x in dist if x > 0)):
+        half = 3.0 * d / np.maximum(peak, 1e-300)
+        a, b = np.maximum(lo, -half), np.minimum(hi, half)
+        if np.all(half < 0.25 * (hi - lo)) and np.all(b > a) and \
+                not any(np.all(half <= 2.0 * h) for h in sizes):
+            boxes.append((a, b))
+            sizes.append(half)
+    return boxes

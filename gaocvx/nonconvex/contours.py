@@ -62,11 +62,11 @@ def curve_zeros(grad, axes, S, fine: int = 8) -> list:
 
     Notes
     -----
-    Where ``|∂F/∂s_i|``
-    along a curve is smallest at a grid line without changing sign (two zeros
-    close together: a P2 beam in a channel has two minima and a saddle within
-    0.03 S on one valley floor, the lines 0.34 S apart), the curve is sampled
-    on ``fine`` lines between its neighbours too.
+    Where ``|∂F/∂s_i|`` along a curve is smaller at a point than at both its
+    neighbours, with or without a sign change beside it (two zeros close
+    together: a P2 beam in a channel has two minima and a saddle within 0.03 S
+    on one valley floor, the lines 0.34 S apart), the curve is sampled on
+    ``fine`` lines on each side of it, twice over (:func:`_scan`).
     """
     out = []
     for j in range(2):

@@ -51,7 +51,7 @@ import scipy.optimize as so
 from ..discrete import DiscreteProblem
 from ..errors import SceneError, SolverError
 from ..scene import check_solve_arguments, numbers_of, whole
-from .bounds import check_bounded, equilibrium_box
+from .bounds import check_bounded, equilibrium_box, zoom_boxes
 from .equilibrium import Equilibrium
 from .obstacle_checks import check_contact, global_starts
 
@@ -200,9 +200,8 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
             # with two modes (a P3 beam held at a ceiling 1.8e-5 m up, 48 elements:
             # that stable equilibrium and an unstable one lay within one step of
             # the grid over S = 82 times the amplitude there -- extreme-scale campaign)
-            from .stationary2 import _zoom_boxes
             points = np.concatenate([points] + [np.linspace(a[0], b[0], grid)
-                                                for a, b in _zoom_boxes(dp, modes, lo, hi)])
+                                                for a, b in zoom_boxes(dp, modes, lo, hi)])
         out = _find(dp, prog, S, points, grid, float(lo[0]), float(hi[0]),
                     scene_energy(dp, modes))
         if not fast and obstacle:

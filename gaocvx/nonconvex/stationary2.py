@@ -9,7 +9,7 @@ every zero is found, so this search is a careful sampling, not a proof:
    an obstacle, of its part within the admissible amplitudes' box), with
    ``s = 0`` exactly among the points; with an obstacle or channel also on
    finer grids of the boxes where a mode alone reaches a surface of it
-   (:func:`_zoom_boxes`);
+   (:func:`.bounds.zoom_boxes`);
 2. every grid cell on whose corners both components of ``∇F`` change sign
    seeds Newton's method on ``∇F = 0`` (the Hessian of F by central
    differences of the envelope gradient), damped to stay in the square, and
@@ -55,6 +55,7 @@ import time
 
 import numpy as np
 
+from .bounds import zoom_boxes
 from .contours import curve_zeros
 from .equilibrium import Equilibrium
 from .obstacle_checks import check_contact
@@ -77,7 +78,7 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
     bounds by a linear program's duality, :func:`.fast_check.amplitude_range`;
     by default ``prog``'s own, if it has them), as for k = 1, and
     finer grids span the boxes where the unstable modes reach the obstacle
-    (:func:`_zoom_boxes`, from ``modes``); ``starts`` (amplitudes: the
+    (:func:`.bounds.zoom_boxes`, from ``modes``); ``starts`` (amplitudes: the
     certified global minimiser's) seed Newton's method and the edge minima.
     With an obstacle the zeros on the zero curves of one component of ``∇F``
     are added on every grid (:func:`.contours.curve_zeros`).
@@ -120,7 +121,7 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
     grids = [[_axis(lo[j], hi[j], grid) for j in range(2)]]
     if dp.contact == "obstacle" and modes is not None:
         grids += [[_axis(a[j], b[j], grid) for j in range(2)]
-                  for a, b in _zoom_boxes(dp, modes, lo, hi)]
+                  for a, b in zoom_boxes(dp, modes, lo, hi)]
     seeds = [np.asarray(x, float) for x in starts]
     for axes in grids:
         seeds += _grid_seeds(grad, axes)
@@ -255,34 +256,6 @@ def _grid_seeds(grad, axes) -> list:
     for i, j in zip(*np.nonzero(norms <= 1e-12 * top)):
         seeds.insert(0, np.array([axes[0][i], axes[1][j]]))
     return seeds
-
-
-def _zoom_boxes(dp, modes, lo, hi) -> list:
-    """Boxes of amplitudes in which the unstable modes reach the obstacle.
-
-    A beam held by an obstacle 1.6 cm below, buckled 21 cm by itself, has its
-    equilibria on the obstacle within 8 % of the amplitudes' range: the 25 x 25
-    grid's step.  A trial found stable equilibria missed in 19 of 40 scenes with
-    two modes and an obstacle or channel (P2 resting on an obstacle, P1 in
-    channels, P4 on obstacles 0.05-0.2 mm below).  For each distance of the
-    obstacle's surfaces from the beam (the nearest and the farthest point of
-    each), the box of half-width three times the amplitude at which a mode
-    alone reaches it, when that is less than a quarter of the grid's range.
-    """
-    peak = np.max(np.abs(modes.phi[dp._w_rows()]), axis=0)
-    dist = [float(np.min(np.abs(dp.g))), float(np.max(np.abs(dp.g)))]
-    if dp.g_above is not None:
-        dist.append(float(np.min(dp.g_above)))
-        dist.append(float(np.max(dp.g_above)))
-    boxes, sizes = [], []
-    for d in sorted(set(x for x in dist if x > 0)):
-        half = 3.0 * d / np.maximum(peak, 1e-300)
-        a, b = np.maximum(lo, -half), np.minimum(hi, half)
-        if np.all(half < 0.25 * (hi - lo)) and np.all(b > a) and \
-                not any(np.all(half <= 2.0 * h) for h in sizes):
-            boxes.append((a, b))
-            sizes.append(half)
-    return boxes
 
 
 def _axis(lo: float, hi: float, grid: int) -> np.ndarray:
