@@ -163,25 +163,30 @@ def test_two_unstable_modes_with_an_obstacle():
     """k = 2 (P1 above its second mode load, q = -5e7 N/m, an obstacle 1 cm below):
     every equilibrium the plane search lists on the contact slices is one of the
     independent energy (KKT point, its stability by second-order conditions), and
-    the dense programs list the same ones.  Six: the buckled global minimum, a
+    the dense programs list the same ones.  Seven: the buckled global minimum, a
     beam resting on the obstacle just off the middle and its mirror image (both
-    stable), two mirror unstable ones and a slightly bent unstable one.  (The
-    search once listed two, with the dense programs agreeing: the three near the
-    obstacle lie within the coarse grid's step of each other.)  Since the zero
-    curves are followed, the dense programs also list the saddle at s2 = 0
-    between the resting pair (independently an unstable KKT point), which the
-    contact slices miss: the fast list must be part of the dense one."""
+    stable), the saddle at s2 = 0 between them (4.8e-4 from each in s2), two
+    mirror unstable ones and a slightly bent unstable one.  (The search once
+    listed two, with the dense programs agreeing: the three near the obstacle lie
+    within the coarse grid's step of each other.  The saddle lies on the line of
+    symmetry s2 = 0, where the sign of dF/ds2 is round-off: the contact slices
+    missed it until the zeros on such lines were looked for along them.)"""
     from test_equilibria_obstacle_campaign import _checked
     scene = Scene.from_dict(scene_dict("P1", q=-5e7, axial=1.1e10, obstacle=0.01, elements=16))
     dense, fast = equilibria(scene, fast=False), equilibria(scene, fast=True)
     _checked(scene, fast)
     assert all(e.status == "optimal" for e in fast)
-    assert len(fast) == 6 and sum(e.stable for e in fast) == 3
+    assert len(fast) == 7 and sum(e.stable for e in fast) == 3
     resting = [e for e in fast if e.stable and abs(e.min["w"] + 0.01) < 1e-9]
     assert len(resting) == 2 and np.allclose(resting[0].w, resting[1].w[::-1], atol=1e-9)
+    saddle = [e for e in fast if not e.stable and abs(e.min["w"] + 0.01) < 1e-9]
+    assert len(saddle) == 1 and abs(saddle[0].amplitudes[1]) <= 1e-9
     _checked(scene, dense)
     scale = max(abs(e.energy) for e in dense)
-    for f in fast:
-        assert any(f.stable == e.stable and
-                   abs(f.energy - e.energy) <= 1e-8 * max(abs(e.energy), 1e-6 * scale)
-                   for e in dense), f.energy
+
+    def same(a, b):
+        return a.stable == b.stable and \
+            abs(a.energy - b.energy) <= 1e-8 * max(abs(b.energy), 1e-6 * scale)
+    assert len(dense) == len(fast)
+    assert all(any(same(f, e) for e in dense) for f in fast)
+    assert all(any(same(e, f) for f in fast) for e in dense)

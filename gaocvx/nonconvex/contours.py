@@ -36,7 +36,7 @@ import math
 import numpy as np
 import scipy.optimize as so
 
-__all__ = ["curve_zeros"]
+__all__ = ["curve_zeros", "line_zeros", "sampled_roots"]
 
 
 def curve_zeros(grad, axes, S, fine: int = 8) -> list:
@@ -212,18 +212,90 @@ def _crossing(grad, j, p0, p1, step, S):
     return None if q is None else _point(j, q[1], c)
 
 
+def line_zeros(grad, axes, S) -> list:
+    """Zeros of ``∇F`` on the lines ``s_j = 0`` that are lines of symmetry of ``F``.
+
+    In a symmetric scene (mesh, supports, loads and obstacle unchanged by
+    x -> L - x) a mode that is odd under the mirror makes ``F`` even in its
+    amplitude: ``∂F/∂s_j = 0`` on the whole line ``s_j = 0`` (up to round-off,
+    whose sign is arbitrary), so that line is a zero curve that :func:`curve_zeros`
+    finds, or not, by the noise's signs.  A P1 beam over an obstacle 1 cm below
+    (16 elements) has a saddle on it between two resting mirror minima 4.8e-4
+    apart in ``s_j``: listed with the dense programs, missed with the fast ones.
+    On such a line the zeros are those of ``∂F/∂s_i`` along it
+    (:func:`sampled_roots` from the grid's points).  A line counts as one of
+    symmetry where ``|∂F/∂s_j|`` at all its admissible grid points is at most
+    1e-6 of the largest ``|∇F|`` there (a candidate on a line that is not one is
+    no zero of ``∇F`` and is dropped by the caller's residual check).
+    """
+    out = []
+    for j in range(2):
+        if 0.0 not in axes[j]:
+            continue
+        i = 1 - j
+        line = [(float(a), grad(_point(i, a, 0.0))) for a in axes[i]]
+        line = [(a, v[1]) for a, v in line if math.isfinite(v[0])]
+        if len(line) < 2:
+            continue
+        d = np.array([g for _, g in line])
+        if np.max(np.abs(d[:, j])) > 1e-6 * max(np.max(np.abs(d)), 1e-300):
+            continue
+        out += [_point(i, r, 0.0) for r in sampled_roots(
+            lambda a: _component(grad, i, a, 0.0, i), [a for a, _ in line], d[:, i], S)]
+    return out
+
+
+def sampled_roots(f, s, d, S, rtol=1e-14) -> list:
+    """Zeros of a scalar function ``f`` from its values ``d`` at sorted points ``s``.
+
+    Each sign change between neighbours is refined by Brent's method (to 1e-13
+    ``S`` and ``rtol``), a point with ``d = 0`` is one; where ``d`` has a local extremum
+    within 5 % of its largest size without changing sign (two zeros between
+    neighbouring points), the extremum is located and, when it lies across
+    zero, both zeros beside it are refined.  ``f`` may return NaN (an
+    inadmissible point): a search that meets one is dropped.
+    """
+    s, d = np.asarray(s, float), np.asarray(d, float)
+    roots = []
+
+    def refine(a, b):
+        r = _root(f, a, b, f(a), f(b), S, rtol=rtol)
+        if r is not None:
+            roots.append(r)
+
+    for i in range(len(s) - 1):
+        if d[i] == 0.0:
+            roots.append(float(s[i]))
+        elif d[i] * d[i + 1] < 0:
+            refine(s[i], s[i + 1])
+    if len(s) and d[-1] == 0.0:
+        roots.append(float(s[-1]))
+    top = np.max(np.abs(d)) if len(d) else 0.0
+    for i in range(1, len(d) - 1):
+        if (d[i] - d[i - 1]) * (d[i + 1] - d[i]) < 0 and abs(d[i]) < 0.05 * top:
+            sign = 1.0 if d[i] > 0 else -1.0
+            res = so.minimize_scalar(lambda x: sign * f(x), bounds=(s[i - 1], s[i + 1]),
+                                     method="bounded", options=dict(xatol=1e-12 * S))
+            if math.isfinite(res.fun) and res.fun < 0:
+                refine(s[i - 1], res.x)
+                refine(res.x, s[i + 1])
+    return roots
+
+
 class _Lost(Exception):
     """A function turned non-finite during a root's search."""
 
 
-def _root(f, a, b, fa, fb, S, xtol=1e-13):
+def _root(f, a, b, fa, fb, S, xtol=1e-13, rtol=None):
     """A root of ``f`` in ``[a, b]`` (``fa``, ``fb``: values of opposite signs) by
-    Brent's method to ``xtol * S``; None where ``f`` turns non-finite (``grad``
+    Brent's method to ``xtol * S`` (and ``rtol``, by default brentq's); None where ``f`` turns non-finite (``grad``
     is cached: the ends cost nothing again)."""
     if fa == 0.0:
         return a
     if fb == 0.0:
         return b
+    if not fa * fb < 0.0:
+        return None
 
     def g(x):
         v = f(x)
@@ -232,6 +304,7 @@ def _root(f, a, b, fa, fb, S, xtol=1e-13):
         return v
 
     try:
-        return float(so.brentq(g, min(a, b), max(a, b), xtol=xtol * S, maxiter=200))
+        tol = {} if rtol is None else {"rtol": rtol}
+        return float(so.brentq(g, min(a, b), max(a, b), xtol=xtol * S, maxiter=200, **tol))
     except (_Lost, ValueError, RuntimeError):
         return None

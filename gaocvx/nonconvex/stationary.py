@@ -46,12 +46,12 @@ import math
 import time
 
 import numpy as np
-import scipy.optimize as so
 
 from ..discrete import DiscreteProblem
 from ..errors import SceneError, SolverError
 from ..scene import check_solve_arguments, numbers_of, whole
 from .bounds import check_bounded, equilibrium_box, zoom_boxes
+from .contours import sampled_roots
 from .equilibrium import Equilibrium
 from .obstacle_checks import check_contact, global_starts
 
@@ -286,39 +286,12 @@ def _find(dp, prog, S, seeds, grid, lo, hi, floor):
         raise SceneError("scene", "no admissible amplitude of the buckling mode (no solve "
                          "succeeded)")
     scale = max(max(abs(v[0]) for _, v in vals), 1e-300)
-    roots = []
-
-    def refine(a, b):
-        try:
-            r = so.brentq(lambda s: dF(s)[1], a, b, xtol=1e-13 * S, rtol=1e-14, maxiter=200)
-        except ValueError:
-            return
-        roots.append(r)
-
-    for (s0, v0), (s1, v1) in zip(vals[:-1], vals[1:]):
-        d0, d1 = v0[1], v1[1]
-        if d0 == 0.0:
-            roots.append(s0)
-        elif d0 * d1 < 0:
-            refine(s0, s1)
-    if vals[-1][1][1] == 0.0:
-        roots.append(vals[-1][0])
-    # Two zeros between neighbouring grid points: F' has a local extremum near zero
-    # there without changing sign at the grid.  Look for its extremum.
-    d = np.array([v[1] for _, v in vals])
-    s_arr = np.array([s for s, _ in vals])
-    for i in range(1, len(d) - 1):
-        if (d[i] - d[i - 1]) * (d[i + 1] - d[i]) < 0 and abs(d[i]) < 0.05 * np.max(np.abs(d)):
-            sign = 1.0 if d[i] > 0 else -1.0
-            res = so.minimize_scalar(lambda s: sign * dF(s)[1], bounds=(s_arr[i - 1], s_arr[i + 1]),
-                                     method="bounded", options=dict(xatol=1e-12 * S))
-            # (the least of sign F' below zero: F' crosses zero twice.  The test
-            # was sign * res.fun < 0, right for a minimum of F' only: a flat beam
-            # held by a gap-0 obstacle, a stable equilibrium, and the unstable one
-            # next to it were missed under a load table with unloaded ends)
-            if res.fun < 0:
-                refine(s_arr[i - 1], res.x)
-                refine(res.x, s_arr[i + 1])
+    # sign changes of F' and pairs of zeros between neighbouring grid points (a
+    # local extremum of F' near zero: the test was once sign * F' < 0 at the
+    # extremum, right for a minimum of F' only -- a flat beam held by a gap-0
+    # obstacle, a stable equilibrium, and the unstable one next to it were missed
+    # under a load table with unloaded ends)
+    roots = sampled_roots(lambda s: dF(s)[1], [s for s, _ in vals], [v[1] for _, v in vals], S)
 
     def at_an_end(t):
         # With one mode the admissible amplitudes are the interval [lo, hi] (the

@@ -14,7 +14,9 @@ every zero is found, so this search is a careful sampling, not a proof:
    seeds Newton's method on ``∇F = 0`` (the Hessian of F by central
    differences of the envelope gradient), damped to stay in the square, and
    so do ``s = 0`` and the given starts (with an obstacle: the certified global
-   minimiser's amplitudes, :func:`.obstacle_checks.global_starts`);
+   minimiser's amplitudes, :func:`.obstacle_checks.global_starts`); on lines of
+   symmetry ``s_j = 0`` (``∂F/∂s_j`` zero to round-off along them) the zeros of
+   the other component are found along the line (:func:`.contours.line_zeros`);
    with an obstacle or channel, also the zeros found by following the zero
    curves of one component of ``∇F`` across each grid (:mod:`.contours`:
    narrow valleys, where Newton's method does not converge from a cell);
@@ -56,7 +58,7 @@ import time
 import numpy as np
 
 from .bounds import zoom_boxes
-from .contours import curve_zeros
+from .contours import curve_zeros, line_zeros
 from .equilibrium import Equilibrium
 from .obstacle_checks import check_contact
 from .stationary import ROOT_TOL
@@ -128,6 +130,8 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
     if math.isfinite(grad(np.zeros(2))[0]):
         seeds.insert(0, np.zeros(2))   # the unloaded beam's trivial equilibrium, if any
     ends = _newton(grad, hessian, seeds, S)
+    # the zeros on lines of symmetry s_j = 0, where the sign of ∂F/∂s_j is round-off
+    ends += [z for axes in grids for z in line_zeros(grad, axes, S)]
     if dp.contact == "obstacle":
         # zeros in narrow valleys, where Newton's method does not converge from
         # a grid cell (:mod:`.contours`)
