@@ -269,3 +269,34 @@ def test_equilibria_in_a_narrow_channel():
     best = solve(Scene.from_dict(data), "global")
     assert best.status == "optimal"
     assert eqs[0].energy == pytest.approx(best.energy, rel=1e-8)
+
+
+_THESIS_BEAM = {"model": "gao", "length": 1.0, "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1,
+                "width": 1.0}
+
+
+@pytest.mark.parametrize("data", [
+    # two modes, no load, a stiff bed at gap 0: lifting off along the first mode
+    # lowers the energy (F = -c s1^2 there), pressing into the bed raises it
+    {"beam": {**_THESIS_BEAM, "supports": "P4"}, "load": {"axial": 5e9},
+     "mesh": {"elements": 8}, "foundation": {"gap": 0.0, "stiffness": 3e12}},
+    {"beam": {**_THESIS_BEAM, "supports": "P4"}, "load": {"axial": 4e9},
+     "mesh": {"elements": 8}, "foundation": {"gap": 0.0, "stiffness": 3e12}},
+    # the same over an obstacle at gap 0 (P2, 16 elements)
+    {"beam": {**_THESIS_BEAM, "supports": "P2"}, "load": {"axial": 11940643521.27065},
+     "mesh": {"elements": 16}, "obstacle": {"gap": 0.0}},
+])
+def test_two_modes_flat_beam_at_gap_zero_without_load_is_unstable(data):
+    """A campaign against an independent energy: with two modes the flat beam on a
+    bed or obstacle at gap 0 was called stable (`optimal` on the bed; a path
+    called it unstable at 4e9 N and stable at 5e9 N): the central-difference
+    Hessian averaged the curvature of lifting off (-c) with that of pressing
+    into the support.  Every equilibrium listed is checked independently (KKT
+    point, its stability from second-order conditions)."""
+    from test_equilibria_obstacle_campaign import _checked
+    scene = Scene.from_dict(data)
+    eqs = equilibria(scene)
+    flat = [e for e in eqs if np.max(np.abs(e.w)) == 0.0]
+    assert len(flat) == 1 and not flat[0].stable and flat[0].curvature < 0
+    assert any(e.stable and e.status == "optimal" for e in eqs)
+    _checked(scene, eqs)

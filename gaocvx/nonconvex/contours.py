@@ -249,8 +249,8 @@ def sampled_roots(f, s, d, S, rtol=1e-14) -> list:
     """Zeros of a scalar function ``f`` from its values ``d`` at sorted points ``s``.
 
     Each sign change between neighbours is refined by Brent's method (to 1e-13
-    ``S`` and ``rtol``), a point with ``d = 0`` is one; where ``d`` has a local extremum
-    within 5 % of its largest size without changing sign (two zeros between
+    ``S`` and ``rtol``), a point with ``d = 0`` is one; where ``d`` has a local
+    extremum within 5 % of its largest size without changing sign (two zeros between
     neighbouring points), the extremum is located and, when it lies across
     zero, both zeros beside it are refined.  ``f`` may return NaN (an
     inadmissible point): a search that meets one is dropped.
@@ -288,8 +288,9 @@ class _Lost(Exception):
 
 def _root(f, a, b, fa, fb, S, xtol=1e-13, rtol=None):
     """A root of ``f`` in ``[a, b]`` (``fa``, ``fb``: values of opposite signs) by
-    Brent's method to ``xtol * S`` (and ``rtol``, by default brentq's); None where ``f`` turns non-finite (``grad``
-    is cached: the ends cost nothing again)."""
+    Brent's method to ``xtol * S`` (and ``rtol``, by default brentq's); None
+    where ``f`` turns non-finite (``grad`` is cached: the ends cost nothing
+    again)."""
     if fa == 0.0:
         return a
     if fb == 0.0:

@@ -42,6 +42,13 @@ class Equilibrium:
         else "inaccurate".
     P : float
         The axial force [N].
+    curvature : float
+        The least second derivative of the reduced function ``F`` at the
+        equilibrium [program units]: ``F''`` with one mode, with two the least
+        Hessian eigenvalue or one-sided directional curvature; NaN at a kink or
+        an edge of the admissible amplitudes.
+    W : float
+        The deflection scale [m] of the amplitudes (see :attr:`amplitude_m`).
     """
 
     energy: float

@@ -236,7 +236,10 @@ def _classify(dF, r, h) -> tuple:
     left, right = (dF(r + t) for t in (-h, h))
     fl, fr = math.isfinite(left[0]), math.isfinite(right[0])
     if fl and fr:
-        curvature = (right[1] - left[1]) / (2 * h)
+        # (the lesser one-sided curvature: at a kink of F's curvature -- a flat
+        # beam lifting off a bed at gap 0 -- the central difference averages a
+        # falling side with a rising one, and the label is the sides')
+        curvature = min(right[1] - mid, mid - left[1]) / h
         if right[1] != left[1]:
             return bool(left[1] < 0 < right[1]), curvature
         return bool(curvature > 0), curvature

@@ -21,8 +21,11 @@ every zero is found, so this search is a careful sampling, not a proof:
    curves of one component of ``∇F`` across each grid (:mod:`.contours`:
    narrow valleys, where Newton's method does not converge from a cell);
 3. zeros are merged when closer than 1e-6 S; each is classified by the
-   eigenvalues of its Hessian: both positive is a local minimum of the energy
-   (stable), else unstable (a saddle or a maximum of F);
+   eigenvalues of its Hessian and by one-sided probes in 16 directions: both
+   eigenvalues positive and ``∇F`` rising away from the zero in every
+   direction is a local minimum of the energy (stable), else unstable (a
+   saddle or a maximum of F; the probes see a kink of F's curvature that the
+   central differences average away);
 4. with an obstacle or channel, a local minimum of ``F`` at a kink or at the
    edge of the admissible amplitudes (a beam resting on the obstacle, or
    pressed flat onto it at gap 0) is no zero of ``∇F``: every grid point whose
@@ -215,10 +218,34 @@ def _at_roots(dp, grad, hessian, roots, S, known=()) -> list:
         eig = np.linalg.eigvalsh(H)
         w, slope = dp.to_physical(u)
         status = "optimal" if ok and res <= ROOT_TOL else "inaccurate"
-        out.append(Equilibrium(float(dp.energy(u) * dp.E0), bool(eig[0] > 0),
+        curvature = min(float(eig[0]), _least_rise(grad, r, 1e-6 * S))
+        out.append(Equilibrium(float(dp.energy(u) * dp.E0), curvature > 0,
                                [float(x) for x in r], dp.x.copy(), w, slope, res, status,
-                               float(dp.P), float(eig[0]), float(dp.W)))
+                               float(dp.P), curvature, float(dp.W)))
     return out
+
+
+def _least_rise(grad, s, h, n: int = 16) -> float:
+    """The least one-sided curvature ``e . (∇F(s + h e) - ∇F(s)) / h`` of F at the
+    zero ``s`` over ``n`` directions ``e`` (inadmissible probes left out; inf if
+    none is admissible): a local minimum needs it positive.
+
+    The central-difference Hessian averages the two sides of a kink of F's
+    second derivative: a flat beam on a bed at gap 0 with two modes and no load
+    has F = -c s1^2 lifting off (s1 > 0) and (K - c) s1^2 into the bed, and
+    K - 2c > 0 called it stable where lifting off lowers the energy (a
+    campaign's P4 beam on a bed of 3e12 N/m^2 at 5e9 N, 8 elements; a path
+    called w = 0 unstable at 4e9 N and stable at 5e9 N).  With one mode the
+    two sides are compared already (:func:`.stationary._classify`).
+    """
+    g0 = np.asarray(grad(s)[1], float)
+    least = math.inf
+    for t in np.linspace(0.0, 2.0 * math.pi, n, endpoint=False):
+        e = np.array([math.cos(t), math.sin(t)])
+        F, d, _, _ = grad(s + h * e)
+        if math.isfinite(F):
+            least = min(least, float(e @ (np.asarray(d, float) - g0)) / h)
+    return least
 
 
 def _images(dp, modes, grad, out, S) -> list:
