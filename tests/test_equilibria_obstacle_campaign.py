@@ -541,9 +541,11 @@ def test_two_modes_in_a_narrow_channel_dense_and_fast_agree():
     """A 2 mm channel, no load, two modes: the dense programs' grid spanned the whole
     proven square (313 here, against an admissible range of 5-7), and a review found
     a stable pair missed that way in such a channel; now the admissible box for
-    both, which list the same twelve, each independently checked (ten before the
+    both, which list the same thirteen, each independently checked (ten before the
     zero curves of one gradient component were followed: the two saddles at
-    s2 = 0 between the mirror minima at s1 = -+2.28 were missed by both)."""
+    s2 = 0 between the mirror minima at s1 = -+2.28 were missed by both; twelve
+    before w = 0 itself, untouched by the channel, was checked as an equilibrium
+    of its own: obstacle_checks.exact_flat)."""
     from conftest import scene_dict
     from gaocvx import Scene
     d = scene_dict("P1", q=None, axial=1.1e10, obstacle=0.002, elements=8)
@@ -552,7 +554,8 @@ def test_two_modes_in_a_narrow_channel_dense_and_fast_agree():
     fast, dense = equilibria(scene, fast=True), equilibria(scene, fast=False)
     _checked(scene, fast)
     _checked(scene, dense)
-    assert len(fast) == len(dense) == 12
+    assert len(fast) == len(dense) == 13
+    assert sum(np.all(e.w == 0.0) and not e.stable for e in fast) == 1
     for f, e in zip(fast, dense):
         assert f.stable == e.stable
         assert abs(f.energy - e.energy) <= 1e-8 * abs(e.energy)
@@ -581,3 +584,39 @@ def test_two_modes_no_duplicate_from_a_line_nearly_of_symmetry():
             assert np.max(np.abs(a.w - b.w)) > 1e-6 * np.max(np.abs(a.w)), (a.energy, b.energy)
     g = solve(scene, "global")
     assert g.status == "optimal" and abs(eqs[0].energy - g.energy) <= 1e-9 * abs(g.energy)
+
+
+_BEAM = {"model": "gao", "length": 1.0, "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1,
+         "width": 1.0}
+
+
+@pytest.mark.parametrize("data, stable", [
+    # two modes, no load, gap 0: w = 0 (an unstable KKT point) was missing
+    ({"beam": {**_BEAM, "supports": "P4"}, "load": {"axial": 7606332094.006402},
+      "mesh": {"elements": 8}, "obstacle": {"gap": 0.0}}, False),
+    # two modes, P3 pressed flat by 1e7 N/m: listed `optimal` 1.3e-11 m up, energy
+    # 1.4e-5 J against 0, independently no KKT point (stationarity 29)
+    ({"beam": {**_BEAM, "supports": "P3"}, "load": {"q": -1e7, "axial": 4498404216.636264},
+      "mesh": {"elements": 10}, "obstacle": {"gap": 0.0}}, True),
+    # one mode, no load, gap 0: w = 0 missing
+    ({"beam": {**_BEAM, "supports": "P1"}, "load": {"axial": 7.0e9},
+      "mesh": {"elements": 12}, "obstacle": {"gap": 0.0}}, False),
+    # one mode, P1 pressed by a point force: `optimal` at 7.7e-12 m, stationarity 9.4e-6
+    ({"beam": {**_BEAM, "supports": "P1"},
+      "load": {"points": [[0.8070657938740201, -9347121.142086903]], "axial": 5303029720.052726},
+      "mesh": {"elements": 12}, "obstacle": {"gap": 0.0}}, True),
+])
+def test_flat_beam_at_gap_zero_is_listed_exactly(data, stable):
+    """A review's campaign against the independent check: at gap 0 the flat beam
+    w = 0 is a KKT point (stationarity <= 6e-12 independently), and was either
+    missing (no load: unstable, lifting off lowers the energy) or listed as a
+    slice's beam 1e-11 m off it, called `optimal` though no KKT point.  It is now
+    listed exactly, once, with the stability the independent check gives."""
+    from gaocvx import Scene
+    scene = Scene.from_dict(data)
+    eqs = equilibria(scene)
+    _checked(scene, eqs)
+    top = max(np.max(np.abs(e.w)) for e in eqs)
+    flat = [e for e in eqs if np.max(np.abs(e.w)) <= 1e-6 * top]
+    assert len(flat) == 1 and np.all(flat[0].w == 0.0) and flat[0].energy == 0.0
+    assert flat[0].status == "optimal" and flat[0].stable == stable

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..errors import SceneError, SolverError
 
-__all__ = ["check_contact", "global_starts", "kkt_point"]
+__all__ = ["check_contact", "exact_flat", "global_starts", "kkt_point"]
 
 log = logging.getLogger(__name__)
 
@@ -100,3 +100,53 @@ def kkt_point(dp, prog, s) -> bool:
             prog.levels
     residual, _ = certify_contact(dp, modes, u, lam, rows, levels, floor)
     return passes(residual)
+
+
+def exact_flat(dp, modes, out, classify) -> list:
+    """The flat beam ``w = 0`` where, with an obstacle, it is an equilibrium itself.
+
+    ``w = 0`` is admissible (gaps >= 0); where it passes the global method's
+    optimality conditions for the whole beam (multipliers recomputed on the
+    touching rows, :func:`.certificate.certify_contact`, at the zero floor), a
+    listed equilibrium within that floor of it (or within 1e-9 of the list's
+    largest deflection, without load) is that one, and is reported exactly:
+    the slices at ``s = 0`` returned beams 1.3e-11 m off it, called `optimal`
+    (a P3 beam pressed flat at gap 0 by 1e7 N/m, two modes: energy 1.4e-5 J
+    against 0, independently no KKT point; one mode, P1 under a point force:
+    7.7e-12 m, stationarity 9.4e-6), their amplitude rows' multipliers taking
+    up the residual.  Where none is listed it is added, its stability from
+    ``classify(s)`` -> ``(stable, curvature)`` at ``s = 0``: without load at gap
+    0 an unstable equilibrium the searches missed (P4, two modes; P1, one),
+    lifting off along the first mode lowering the energy.
+    """
+    from ..certificate import passes
+    from ..mixed import MixedForm
+    from .certificate import certify_contact
+    from .equilibrium import Equilibrium
+    from .node import obstacle_rows
+
+    rows, levels = obstacle_rows(dp)
+    u0 = np.zeros(dp.n)
+    if np.any(rows @ u0 < levels):
+        return out
+    mf = MixedForm.on_obstacle(dp)
+    floor = mf.zero_floor if mf.has_load else 0.0
+    residual, _ = certify_contact(dp, modes, u0, None, rows, levels, floor)
+    if not passes(residual):
+        return out
+    top = max((float(np.max(np.abs(e.w))) for e in out if e is not None), default=0.0)
+    near = max(floor * dp.W, 1e-9 * top)
+    flat = [e for e in out if e is not None and float(np.max(np.abs(e.w))) <= near]
+    energy = float(dp.energy(u0) * dp.E0)
+    zeros = np.zeros(len(dp.x))
+    if flat:
+        keep = flat[0]
+        keep.w, keep.slope, keep.energy = zeros, zeros.copy(), energy
+        keep.amplitudes, keep.residual, keep.status = [0.0] * modes.k, 0.0, "optimal"
+        return [e for e in out if e is keep or all(e is not f for f in flat)]
+    stable, curvature = classify(np.zeros(modes.k))
+    log.info("equilibria: the flat beam w = 0, an equilibrium, added (%s)",
+             "stable" if stable else "unstable")
+    return out + [Equilibrium(energy, bool(stable), [0.0] * modes.k, dp.x.copy(), zeros,
+                              zeros.copy(), 0.0, "optimal", float(dp.P), float(curvature),
+                              float(dp.W))]

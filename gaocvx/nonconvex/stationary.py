@@ -53,7 +53,7 @@ from ..scene import check_solve_arguments, numbers_of, whole
 from .bounds import check_bounded, equilibrium_box, zoom_boxes
 from .contours import sampled_roots
 from .equilibrium import Equilibrium
-from .obstacle_checks import check_contact, global_starts
+from .obstacle_checks import check_contact, exact_flat, global_starts
 
 __all__ = ["Equilibrium", "equilibria", "GRID", "MAX_GRID"]
 
@@ -206,6 +206,11 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                     scene_energy(dp, modes))
         if not fast and obstacle:
             check_contact(dp, prog, out)
+        if obstacle and None not in out:
+            def classify(s):
+                dF = lambda t: prog.reduced([t])[:2]   # noqa: E731
+                return _classify(lambda t: (dF(t)[0], float(dF(t)[1][0])), 0.0, 1e-6 * S)
+            out = sorted(exact_flat(dp, modes, out, classify), key=lambda e: e.energy)
     if out and all(e is not None for e in out):
         return out
     # A zero of F' whose slice failed, or no equilibrium at all (the global

@@ -39,7 +39,9 @@ every zero is found, so this search is a careful sampling, not a proof:
 5. with an obstacle, the mirror images (x -> L - x) of the equilibria found,
    where mesh and supports are symmetric, seed steps 2 and 4 again, and every
    equilibrium called ``optimal`` must pass the global method's optimality
-   conditions (:func:`.obstacle_checks.check_contact`), else it is ``inaccurate``.
+   conditions (:func:`.obstacle_checks.check_contact`), else it is ``inaccurate``;
+   and the flat beam ``w = 0`` is checked as an equilibrium of its own
+   (:func:`.obstacle_checks.exact_flat`).
 
 Examples
 --------
@@ -64,7 +66,7 @@ import numpy as np
 from .bounds import zoom_boxes
 from .contours import curve_zeros, line_zeros
 from .equilibrium import Equilibrium
-from .obstacle_checks import check_contact
+from .obstacle_checks import check_contact, exact_flat
 from .stationary import ROOT_TOL
 
 __all__ = ["find_plane", "GRID2"]
@@ -162,6 +164,11 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
             out += _at_roots(dp, grad, hessian, _newton(grad, hessian, images, S), S, found())
             out += _edge_minima(dp, grad, None, S, found(), floor, images)
         check_contact(dp, prog, out)
+        if modes is not None:
+            def classify(s):
+                least = _least_rise(grad, s, 1e-6 * S)
+                return least > 0, least
+            out = exact_flat(dp, modes, out, classify)
     out.sort(key=lambda e: e.energy)
     log.info("equilibria (k = 2): %d found from %d seeds, %d solves in %.2f s", len(out),
              len(seeds), len(cache), time.perf_counter() - t0)
