@@ -620,3 +620,27 @@ def test_flat_beam_at_gap_zero_is_listed_exactly(data, stable):
     flat = [e for e in eqs if np.max(np.abs(e.w)) <= 1e-6 * top]
     assert len(flat) == 1 and np.all(flat[0].w == 0.0) and flat[0].energy == 0.0
     assert flat[0].status == "optimal" and flat[0].stable == stable
+
+
+@pytest.mark.slow
+def test_two_modes_minima_beside_a_saddle_in_a_channel():
+    """A review's independent multi-start: P1 in a channel under a symmetric load
+    table (10 elements, two modes) has a strict mirror pair of minima at
+    -3563751.02 J (stationarity 2.8e-9, curvature +0.13 independently) 0.009 S from
+    a listed saddle pair (-3563540.56 J), within one grid cell: missed by the
+    cells, the zero curves and Newton's method.  The descents from each saddle
+    along its falling direction find them; every listed equilibrium checked."""
+    from gaocvx import Scene
+    scene = Scene.from_dict({
+        "beam": {**_BEAM, "supports": "P1"},
+        "load": {"q": [[0.0, 1699156.0243303804], [0.22541410804981066, -22569834.540649585],
+                       [0.7745858919501893, -22569834.540649585], [1.0, 1699156.0243303804]],
+                 "axial": 17914799984.331528},
+        "mesh": {"elements": 10},
+        "obstacle": {"gap": 0.00011313266907135035, "gap_above": 0.009385239927590393}})
+    eqs = equilibria(scene)
+    _checked(scene, eqs)
+    pair = [e for e in eqs if abs(e.energy + 3563751.02) <= 0.05]
+    assert len(pair) == 2 and all(e.stable and e.status == "optimal" for e in pair)
+    assert np.allclose(pair[0].w, pair[1].w[::-1], atol=1e-9)
+    assert all(e.status == "optimal" for e in eqs)

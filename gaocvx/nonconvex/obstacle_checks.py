@@ -75,6 +75,25 @@ def kkt_point(dp, prog, s) -> bool:
     stationarity 1e5 and 3e6 where the independent check measured 4e-13): it
     is then ``inaccurate``, which errs on the safe side.
     """
+    if _kkt_point(dp, prog, s):
+        return True
+    cache = getattr(prog, "_cache", None)
+    if not cache:
+        return False
+    # The contact slices warm-start from the nearest slice solved before, so the
+    # multipliers found depend on the search's history: a beam resting on an
+    # obstacle (P1 in a channel, 10 elements) passed or failed by the order of
+    # the solves before it.  Once more from the program's own start.
+    saved = list(cache)
+    cache.clear()
+    try:
+        return _kkt_point(dp, prog, s)
+    finally:
+        cache[:] = saved
+
+
+def _kkt_point(dp, prog, s) -> bool:
+    """:func:`kkt_point` with the slice solved once, as the program starts it."""
     from ..certificate import passes
     from ..mixed import MixedForm
     from .certificate import certify_contact

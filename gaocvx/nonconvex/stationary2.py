@@ -17,7 +17,9 @@ every zero is found, so this search is a careful sampling, not a proof:
    minimiser's amplitudes, :func:`.obstacle_checks.global_starts`); on lines of
    symmetry ``s_j = 0`` (``∂F/∂s_j`` zero to round-off along them) the zeros of
    the other component are found along the line (:func:`.contours.line_zeros`)
-   and polished by Newton's method;
+   and polished by Newton's method; and the ends of descents of ``F`` from every
+   saddle along its falling direction (:func:`_descents`: a minimum in the same
+   grid cell as a saddle);
    with an obstacle or channel, also the zeros found by following the zero
    curves of one component of ``∇F`` across each grid (:mod:`.contours`:
    narrow valleys, where Newton's method does not converge from a cell);
@@ -146,12 +148,19 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
         # a grid cell (:mod:`.contours`)
         ends += [z for axes in grids for z in curve_zeros(grad, axes, S)]
     out = _at_roots(dp, grad, hessian, ends, S)
+    # down both sides of every saddle's falling direction: a minimum next to a
+    # saddle, in the same grid cell, is where that path ends
+    # (only zeros to the tolerance: a descent's end at a kink of F is left to the
+    # edge minima, which once lost a resting beam's `optimal` to an inaccurate zero)
+    descents = _descents(grad, hessian, out, S)
+    out += _at_roots(dp, grad, hessian, _newton(grad, hessian, descents, S), S,
+                     [e.amplitudes for e in out], strict=True)
     if dp.contact == "obstacle":
         def found():
             return [np.asarray(e.amplitudes) for e in out]
         for axes in grids:
             out += _edge_minima(dp, grad, axes, S, found(), floor)
-        out += _edge_minima(dp, grad, None, S, found(), floor, starts)
+        out += _edge_minima(dp, grad, None, S, found(), floor, list(starts) + descents)
         # The flat beam at gap 0 may be a minimum whose basin is far below the
         # grid's step (F rises over 1e-9 S, then falls: a P4 beam under a load
         # table, 8 elements): tried with a simplex of that size.
@@ -205,9 +214,10 @@ def _newton(grad, hessian, seeds, S) -> list:
     return ends
 
 
-def _at_roots(dp, grad, hessian, roots, S, known=()) -> list:
+def _at_roots(dp, grad, hessian, roots, S, known=(), strict=False) -> list:
     """The equilibria at Newton's end points that are zeros of ``∇F`` (step 3),
-    merged when closer than 1e-6 S (to each other or to ``known`` amplitudes).
+    merged when closer than 1e-6 S (to each other or to ``known`` amplitudes);
+    ``strict``: only those within the residual's tolerance.
 
     (End points where Newton did not converge, at a kink of F, are left to the
     edge minima: they once also kept the edge minima from reporting a beam
@@ -220,7 +230,7 @@ def _at_roots(dp, grad, hessian, roots, S, known=()) -> list:
         F, d, u, ok = grad(r)
         size = sum(abs(v) for v in dp.energy_parts(u).values()) or 1.0
         res = float(np.linalg.norm(d)) * max(float(np.linalg.norm(r)), 1e-3 * S) / size
-        if res > 1e3 * ROOT_TOL:  # Newton did not converge: no zero here
+        if res > (ROOT_TOL if strict else 1e3 * ROOT_TOL):  # Newton did not converge
             continue
         H = hessian(r)
         if H is None:
@@ -234,6 +244,50 @@ def _at_roots(dp, grad, hessian, roots, S, known=()) -> list:
                                [float(x) for x in r], dp.x.copy(), w, slope, res, status,
                                float(dp.P), curvature, float(dp.W)))
     return out
+
+
+def _descents(grad, hessian, out, S) -> list:
+    """End points of descents of ``F`` from each unstable equilibrium, a step of
+    1e-3 S along its Hessian's falling direction on either side (Nelder-Mead,
+    to 1e-8 S; Newton's method polishes them).
+
+    A saddle's falling paths end at minima (or the admissible edge): a P1 beam in
+    a channel under a symmetric load table (10 elements) had a strict mirror pair
+    of minima 0.009 S from a listed saddle pair, within one grid cell, missed by
+    the cells, the zero curves and Newton's method alike (a review's
+    independent multi-start found them, 210 J below the saddles).
+    """
+    import scipy.optimize as so
+
+    def f(s):
+        if np.any(np.abs(s) > S):
+            return math.inf
+        v = grad(np.asarray(s, float))[0]
+        return v if math.isfinite(v) else math.inf
+
+    ends = []
+    for e in out:
+        if e.stable:
+            continue
+        r = np.asarray(e.amplitudes, float)
+        H = hessian(r)
+        if H is None:
+            continue
+        lam, vec = np.linalg.eigh(H)
+        if not lam[0] < 0:
+            continue
+        for sign in (1.0, -1.0):
+            s0 = r + sign * 1e-3 * S * vec[:, 0]
+            if not f(s0) < f(r):
+                continue
+            simplex = np.array([s0, s0 + [1e-3 * S, 0.0], s0 + [0.0, 1e-3 * S]])
+            with np.errstate(invalid="ignore", over="ignore"):
+                res = so.minimize(f, s0, method="Nelder-Mead",
+                                  options=dict(initial_simplex=simplex, xatol=1e-8 * S,
+                                               fatol=0.0, maxiter=300))
+            if math.isfinite(res.fun):
+                ends.append(np.asarray(res.x, float))
+    return ends
 
 
 def _least_rise(grad, s, h, n: int = 16) -> float:
