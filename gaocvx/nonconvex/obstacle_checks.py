@@ -77,19 +77,14 @@ def kkt_point(dp, prog, s) -> bool:
     """
     if _kkt_point(dp, prog, s):
         return True
-    cache = getattr(prog, "_cache", None)
-    if not cache:
+    if not hasattr(prog, "cold"):
         return False
     # The contact slices warm-start from the nearest slice solved before, so the
     # multipliers found depend on the search's history: a beam resting on an
     # obstacle (P1 in a channel, 10 elements) passed or failed by the order of
     # the solves before it.  Once more from the program's own start.
-    saved = list(cache)
-    cache.clear()
-    try:
+    with prog.cold():
         return _kkt_point(dp, prog, s)
-    finally:
-        cache[:] = saved
 
 
 def _kkt_point(dp, prog, s) -> bool:

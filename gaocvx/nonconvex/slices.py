@@ -8,6 +8,7 @@ Used by :func:`.stationary.equilibria` beyond the dense programs.
 
 from __future__ import annotations
 
+import contextlib
 import math
 
 import numpy as np
@@ -131,6 +132,18 @@ class ContactSlices:
         # apart, relative, and L-BFGS-B stopped 1e-5 off the minimiser on such noise)
         F = float(sum(mf.energy_parts(z).values())) - float(lam @ mf.gap(z))
         return F, -nu, mf.to_hermite(z), bool(converged and violation <= FEASIBLE)
+
+    @contextlib.contextmanager
+    def cold(self):
+        """A context in which :meth:`reduced` starts from the program's own start,
+        not from the nearest slice solved before (whose multipliers make the
+        answer depend on the search's history); the warm starts are kept."""
+        saved = list(self._cache)
+        self._cache.clear()
+        try:
+            yield self
+        finally:
+            self._cache[:] = saved
 
     def _multipliers(self, target, z, lam, rho, updates=60, stall=5):
         """The method of multipliers on the slice; (z, nu, converged, lam, violation, rho) or None.

@@ -208,8 +208,10 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
             check_contact(dp, prog, out)
         if obstacle and None not in out:
             def classify(s):
-                dF = lambda t: prog.reduced([t])[:2]   # noqa: E731
-                return _classify(lambda t: (dF(t)[0], float(dF(t)[1][0])), 0.0, 1e-6 * S)
+                def dF(t):   # (one solve per probe)
+                    F, d = prog.reduced([t])[:2]
+                    return F, float(d[0])
+                return _classify(dF, 0.0, 1e-6 * S)
             out = sorted(exact_flat(dp, modes, out, classify), key=lambda e: e.energy)
     if out and all(e is not None for e in out):
         return out

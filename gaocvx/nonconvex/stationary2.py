@@ -259,12 +259,7 @@ def _descents(grad, hessian, out, S) -> list:
     """
     import scipy.optimize as so
 
-    def f(s):
-        if np.any(np.abs(s) > S):
-            return math.inf
-        v = grad(np.asarray(s, float))[0]
-        return v if math.isfinite(v) else math.inf
-
+    f = _in_square(grad, S)
     ends = []
     for e in out:
         if e.stable:
@@ -288,6 +283,17 @@ def _descents(grad, hessian, out, S) -> list:
             if math.isfinite(res.fun):
                 ends.append(np.asarray(res.x, float))
     return ends
+
+
+def _in_square(grad, S):
+    """``F`` for a minimiser: ``+inf`` outside the square ``[-S, S]^2`` and at
+    inadmissible amplitudes."""
+    def f(s):
+        if np.any(np.abs(s) > S):
+            return math.inf
+        v = grad(np.asarray(s, float))[0]
+        return v if math.isfinite(v) else math.inf
+    return f
 
 
 def _least_rise(grad, s, h, n: int = 16) -> float:
@@ -382,12 +388,7 @@ def _edge_minima(dp, grad, axes, S, roots, floor, starts=(), step=1e-3) -> list:
     import scipy.optimize as so
 
     out = []
-
-    def f(s):
-        if np.any(np.abs(s) > S):
-            return math.inf
-        v = grad(np.asarray(s, float))[0]
-        return v if math.isfinite(v) else math.inf
+    f = _in_square(grad, S)
 
     for s0, h in _local_minima(grad, axes) if axes is not None else \
             [(np.asarray(x, float), np.full(2, step * S)) for x in starts]:
