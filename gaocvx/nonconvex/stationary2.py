@@ -18,8 +18,9 @@ every zero is found, so this search is a careful sampling, not a proof:
    symmetry ``s_j = 0`` (``∂F/∂s_j`` zero to round-off along them) the zeros of
    the other component are found along the line (:func:`.contours.line_zeros`)
    and polished by Newton's method; and the ends of descents of ``F`` from every
-   saddle along its falling direction (:func:`_descents`: a minimum in the same
-   grid cell as a saddle);
+   saddle along its falling direction (:mod:`.descents`: a minimum in the same
+   grid cell as a saddle, or in a strip narrower than a cell), and the saddles
+   between those minima and their nearest neighbours;
    with an obstacle or channel, also the zeros found by following the zero
    curves of one component of ``∇F`` across each grid (:mod:`.contours`:
    narrow valleys, where Newton's method does not converge from a cell);
@@ -67,6 +68,7 @@ import numpy as np
 
 from .bounds import zoom_boxes
 from .contours import curve_zeros, line_zeros
+from .descents import descents as _descents, in_square as _in_square, passes as _passes
 from .equilibrium import Equilibrium
 from .obstacle_checks import check_contact, exact_flat
 from .stationary import ROOT_TOL
@@ -156,7 +158,15 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
     # (only zeros to the tolerance: a descent's end at a kink of F is left to the
     # edge minima, which once lost a resting beam's `optimal` to an inaccurate zero)
     descents = _descents(grad, hessian, out, S)
-    out += _at_roots(dp, grad, hessian, _newton(grad, hessian, descents, S), S,
+    ends = _at_roots(dp, grad, hessian, _newton(grad, hessian, descents, S), S,
+                     [e.amplitudes for e in out], strict=True)
+    out += ends
+    # and the saddle between such a minimum and its nearest neighbour: two strict
+    # minima have one between them, and beside a minimum in a narrow strip it is
+    # as hard to find as the minimum was
+    passes = _passes(grad, [e.amplitudes for e in ends if e.stable],
+                     [e.amplitudes for e in out if e.stable], S)
+    out += _at_roots(dp, grad, hessian, _newton(grad, hessian, passes, S), S,
                      [e.amplitudes for e in out], strict=True)
     if dp.contact == "obstacle":
         def found():
@@ -247,88 +257,6 @@ def _at_roots(dp, grad, hessian, roots, S, known=(), strict=False) -> list:
                                [float(x) for x in r], dp.x.copy(), w, slope, res, status,
                                float(dp.P), curvature, float(dp.W)))
     return out
-
-
-def _descents(grad, hessian, out, S) -> list:
-    """End points of descents of ``F`` from each unstable equilibrium along its
-    Hessian's falling direction on either side: Nelder-Mead from a step of
-    1e-3 S, to 1e-8 S, and the gradient's flow from a step of 1e-5 S
-    (:func:`_flow`); Newton's method polishes them.
-
-    A saddle's falling paths end at minima (or the admissible edge): a P1 beam in
-    a channel under a symmetric load table (10 elements) had a strict mirror pair
-    of minima 0.009 S from a listed saddle pair, within one grid cell, missed by
-    the cells, the zero curves and Newton's method alike (a review's
-    independent multi-start found them, 210 J below the saddles).  The simplex
-    steps over a basin narrower than itself, the flow does not: in a P1 channel
-    under two point forces (16 elements) a minimum 6e-4 S from a saddle, in a
-    strip 8e-6 S wide where a second contact holds, was missed by the simplex.
-    """
-    import scipy.optimize as so
-
-    f = _in_square(grad, S)
-    ends = []
-    for e in out:
-        if e.stable:
-            continue
-        r = np.asarray(e.amplitudes, float)
-        H = hessian(r)
-        if H is None:
-            continue
-        lam, vec = np.linalg.eigh(H)
-        if not lam[0] < 0:
-            continue
-        for sign in (1.0, -1.0):
-            s0 = r + sign * 1e-3 * S * vec[:, 0]
-            if not f(s0) < f(r):
-                continue
-            simplex = np.array([s0, s0 + [1e-3 * S, 0.0], s0 + [0.0, 1e-3 * S]])
-            with np.errstate(invalid="ignore", over="ignore"):
-                res = so.minimize(f, s0, method="Nelder-Mead",
-                                  options=dict(initial_simplex=simplex, xatol=1e-8 * S,
-                                               fatol=0.0, maxiter=300))
-            if math.isfinite(res.fun):
-                ends.append(np.asarray(res.x, float))
-            end = _flow(grad, r + sign * 1e-5 * S * vec[:, 0], S)
-            if end is not None:
-                ends.append(end)
-    return ends
-
-
-def _flow(grad, s, S, steps: int = 400):
-    """The end of the gradient's flow ``s' = -∇F / |∇F|`` from ``s`` (None where
-    ``F`` is not finite there), by steps that double while ``F`` falls and the
-    gradient turns by less than 60 degrees over a step, and shrink fourfold
-    otherwise: the flow cannot step over a basin, since ``∇F`` turns entering
-    it; it stops at a zero, at a kink (the step below 1e-12 S) or after ``steps``.
-    """
-    F, d, _, _ = grad(s)
-    if not math.isfinite(F):
-        return None
-    h = 1e-5 * S
-    for _ in range(steps):
-        g = float(np.linalg.norm(d))
-        if g == 0.0 or h < 1e-12 * S:
-            break
-        t = s - h * d / g
-        F1, d1, _, _ = grad(t)
-        if np.all(np.abs(t) <= S) and math.isfinite(F1) and F1 < F \
-                and d1 @ d >= 0.5 * float(np.linalg.norm(d1)) * g:
-            s, F, d, h = t, F1, d1, min(2.0 * h, 1e-2 * S)
-        else:
-            h *= 0.25
-    return s
-
-
-def _in_square(grad, S):
-    """``F`` for a minimiser: ``+inf`` outside the square ``[-S, S]^2`` and at
-    inadmissible amplitudes."""
-    def f(s):
-        if np.any(np.abs(s) > S):
-            return math.inf
-        v = grad(np.asarray(s, float))[0]
-        return v if math.isfinite(v) else math.inf
-    return f
 
 
 def _least_rise(grad, s, h, n: int = 16) -> float:
