@@ -74,7 +74,8 @@ def flow(grad, s, S, steps: int = 400):
     otherwise: a step that lands across a basin finds ``∇F`` turned and is
     shortened (a step over a basin without such a turn is still possible: this is
     a search, not a proof).  It stops at a zero, at a kink (the step below
-    1e-12 S) or after ``steps``.
+    1e-9 S: Newton's method, or the edge minima, go on from there) or after
+    ``steps``.
     """
     F, d, _, _ = grad(s)
     if not math.isfinite(F):
@@ -82,7 +83,7 @@ def flow(grad, s, S, steps: int = 400):
     h = 1e-5 * S
     for _ in range(steps):
         g = float(np.linalg.norm(d))
-        if g == 0.0 or h < 1e-12 * S:
+        if g == 0.0 or h < 1e-9 * S:
             break
         t = s - h * d / g
         F1, d1, _, _ = grad(t)

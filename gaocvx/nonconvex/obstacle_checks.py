@@ -11,12 +11,13 @@ global minimiser, an equilibrium, is among its starts (:func:`global_starts`).
 from __future__ import annotations
 
 import logging
+import math
 
 import numpy as np
 
 from ..errors import SceneError, SolverError
 
-__all__ = ["check_contact", "exact_flat", "global_starts", "kkt_point"]
+__all__ = ["at_global", "check_contact", "exact_flat", "global_starts", "kkt_point"]
 
 log = logging.getLogger(__name__)
 
@@ -42,6 +43,35 @@ def global_starts(dp, modes) -> list:
     return [np.asarray(a["amplitudes"], float) * r for a in [info] + info["alternatives"]]
 
 
+def at_global(dp, prog, out, starts, F, S) -> None:
+    """The listed equilibria that are the certified global minimiser: stable
+    (``out`` in place).
+
+    An equilibrium within 1e-6 ``S`` of one of the ``starts``
+    (:func:`global_starts`) whose ``F`` is no higher than the start's (1e-10 of
+    its size) is a global minimiser, so a local one, whatever its probes say;
+    ``optimal`` if it passes :func:`kkt_point`.  (A P3 beam in a channel at gap
+    0 without load, two modes, 10 elements: the certified global minimiser,
+    lying on the floor by the clamp and held at the ceiling at the free end,
+    was listed unstable and ``inaccurate``: F's Hessian by central differences
+    straddled the contacts' kinks, and Newton's residual stalled at 1.2e-6.)
+    """
+    for s in starts:
+        top = F(s)
+        for e in out:
+            if e is None or np.linalg.norm(np.asarray(e.amplitudes) - s) > 1e-6 * S:
+                continue
+            if not F(e.amplitudes) <= top + 1e-10 * abs(top):
+                continue
+            if not e.stable:
+                log.info("equilibria: the certified global minimiser at s = %s: stable",
+                         e.amplitudes)
+                e.curvature = math.nan      # (the probes' value, which was wrong)
+            e.stable = True
+            if e.status != "optimal" and kkt_point(dp, prog, e.amplitudes):
+                e.status = "optimal"
+
+
 def check_contact(dp, prog, out) -> None:
     """Equilibria with an obstacle: ``optimal`` only at a KKT point (``out`` in place).
 
@@ -50,7 +80,8 @@ def check_contact(dp, prog, out) -> None:
     called 10 deflections optimal that are no KKT point of the independent
     energy (stationarity up to 5e5 at gap 0, a beam pressed flat returned as
     3e-12 m).  One that fails :func:`kkt_point` becomes ``inaccurate``.  Used
-    for the dense programs with one unstable mode and for every search with two.
+    for every search (the fast path with one mode since a campaign's zero
+    4.3e-9 from s = 0, no KKT point, was called optimal on its residual).
     """
     for e in out:
         if e is None or e.status != "optimal":
@@ -116,22 +147,30 @@ def _kkt_point(dp, prog, s) -> bool:
     return passes(residual)
 
 
-def exact_flat(dp, modes, out, classify) -> list:
+def exact_flat(dp, modes, out, classify, relabel: bool = False, S: float = 0.0) -> list:
     """The flat beam ``w = 0`` where, with an obstacle, it is an equilibrium itself.
 
     ``w = 0`` is admissible (gaps >= 0); where it passes the global method's
     optimality conditions for the whole beam (multipliers recomputed on the
     touching rows, :func:`.certificate.certify_contact`, at the zero floor), a
     listed equilibrium within that floor of it (or within 1e-9 of the list's
-    largest deflection, without load) is that one, and is reported exactly:
+    largest deflection, without load; or within 1e-6 ``S`` of it in amplitude)
+    is that one, and is reported exactly:
     the slices at ``s = 0`` returned beams 1.3e-11 m off it, called `optimal`
     (a P3 beam pressed flat at gap 0 by 1e7 N/m, two modes: energy 1.4e-5 J
     against 0, independently no KKT point; one mode, P1 under a point force:
     7.7e-12 m, stationarity 9.4e-6), their amplitude rows' multipliers taking
     up the residual.  Where none is listed it is added, its stability from
-    ``classify(s)`` -> ``(stable, curvature)`` at ``s = 0``: without load at gap
+    ``classify(s)`` -> ``(stable, curvature)`` at ``s = 0`` (also where the
+    entries reported as w = 0 disagree): without load at gap
     0 an unstable equilibrium the searches missed (P4, two modes; P1, one),
-    lifting off along the first mode lowering the energy.
+    lifting off along the first mode lowering the energy.  ``relabel``: the
+    stability is ``classify``'s also where a listed entry is reported as
+    w = 0 (two modes: the entry's label came from probes that do not see the
+    kink of F at w = 0 -- central differences and 16 directions, or 8 probes
+    1e-9 S around an edge minimum -- and a beam pressed flat by point forces,
+    lifting off in a cone of directions 10 to 40 degrees wide, was called
+    stable three times in a campaign of 22 such scenes).
     """
     from ..certificate import passes
     from ..mixed import MixedForm
@@ -150,13 +189,21 @@ def exact_flat(dp, modes, out, classify) -> list:
         return out
     top = max((float(np.max(np.abs(e.w))) for e in out if e is not None), default=0.0)
     near = max(floor * dp.W, 1e-9 * top)
-    flat = [e for e in out if e is not None and float(np.max(np.abs(e.w))) <= near]
+    # (or within the searches' merging distance, 1e-6 S, of s = 0: a one-mode zero
+    # 4.3e-9 from it, 5.8e-12 m off w = 0, no KKT point, was listed beside it --
+    # P1 in a channel at gap 0 under two point forces, 10 elements)
+    flat = [e for e in out if e is not None and (
+        float(np.max(np.abs(e.w))) <= near
+        or float(np.linalg.norm(e.amplitudes)) <= 1e-6 * S)]
     energy = float(dp.energy(u0) * dp.E0)
     zeros = np.zeros(len(dp.x))
     if flat:
         keep = flat[0]
         keep.w, keep.slope, keep.energy = zeros, zeros.copy(), energy
         keep.amplitudes, keep.residual, keep.status = [0.0] * modes.k, 0.0, "optimal"
+        if relabel or len({e.stable for e in flat}) > 1:
+            stable, curvature = classify(np.zeros(modes.k))
+            keep.stable, keep.curvature = bool(stable), float(curvature)
         return [e for e in out if e is keep or all(e is not f for f in flat)]
     stable, curvature = classify(np.zeros(modes.k))
     log.info("equilibria: the flat beam w = 0, an equilibrium, added (%s)",

@@ -204,7 +204,7 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                                                 for a, b in zoom_boxes(dp, modes, lo, hi)])
         out = _find(dp, prog, S, points, grid, float(lo[0]), float(hi[0]),
                     scene_energy(dp, modes))
-        if not fast and obstacle:
+        if obstacle:
             check_contact(dp, prog, out)
         if obstacle and None not in out:
             def classify(s):
@@ -212,7 +212,7 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                     F, d = prog.reduced([t])[:2]
                     return F, float(d[0])
                 return _classify(dF, 0.0, 1e-6 * S)
-            out = sorted(exact_flat(dp, modes, out, classify), key=lambda e: e.energy)
+            out = sorted(exact_flat(dp, modes, out, classify, S=S), key=lambda e: e.energy)
     if out and all(e is not None for e in out):
         return out
     # A zero of F' whose slice failed, or no equilibrium at all (the global

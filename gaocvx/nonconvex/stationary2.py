@@ -25,7 +25,8 @@ every zero is found, so this search is a careful sampling, not a proof:
    curves of one component of ``∇F`` across each grid (:mod:`.contours`:
    narrow valleys, where Newton's method does not converge from a cell);
 3. zeros are merged when closer than 1e-6 S; each is classified by the
-   eigenvalues of its Hessian and by one-sided probes in 16 directions: both
+   eigenvalues of its Hessian and by one-sided probes in 16 directions (64,
+   refined, where those 16 rise): both
    eigenvalues positive and ``∇F`` rising away from the zero in every
    direction is a local minimum of the energy (stable), else unstable (a
    saddle or a maximum of F; the probes see a kink of F's curvature that the
@@ -43,6 +44,8 @@ every zero is found, so this search is a careful sampling, not a proof:
    where mesh and supports are symmetric, seed steps 2 and 4 again, and every
    equilibrium called ``optimal`` must pass the global method's optimality
    conditions (:func:`.obstacle_checks.check_contact`), else it is ``inaccurate``;
+   one at the certified global minimiser's amplitudes is stable
+   (:func:`.obstacle_checks.at_global`);
    and the flat beam ``w = 0`` is checked as an equilibrium of its own
    (:func:`.obstacle_checks.exact_flat`).
 
@@ -70,7 +73,7 @@ from .bounds import zoom_boxes
 from .contours import curve_zeros, line_zeros
 from .descents import descents as _descents, in_square as _in_square, passes as _passes
 from .equilibrium import Equilibrium
-from .obstacle_checks import check_contact, exact_flat
+from .obstacle_checks import at_global, check_contact, exact_flat
 from .stationary import ROOT_TOL
 
 __all__ = ["find_plane", "GRID2"]
@@ -78,9 +81,6 @@ __all__ = ["find_plane", "GRID2"]
 log = logging.getLogger(__name__)
 
 GRID2 = 25  # odd: (0, 0) is a grid point
-# the least rise of F [relative to its scale] over an edge minimum's probes that
-# shows a minimum: the slices' F is reproducible to a few 1e-12 of the scale
-EDGE_RISE = 1e-11
 
 
 def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
@@ -186,11 +186,19 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
             out += _at_roots(dp, grad, hessian, _newton(grad, hessian, images, S), S, found())
             out += _edge_minima(dp, grad, None, S, found(), floor, images)
         check_contact(dp, prog, out)
+        at_global(dp, prog, out, [np.asarray(x, float) for x in starts],
+                  lambda s: grad(np.asarray(s, float))[0], S)
         if modes is not None:
             def classify(s):
-                least = _least_rise(grad, s, 1e-6 * S)
+                # w = 0 at a kink of F: the slopes beside it, in directions refined
+                # where they rise least; a fall at 1e-6 S is confirmed at 1e-8 S
+                # (a beam pressed flat may rise over a basin narrower than the
+                # first, then fall: the second decides; below it, round-off does)
+                least = _least_rise(grad, s, 1e-6 * S, kink=True)
+                if not least > 0:
+                    least = max(least, _least_rise(grad, s, 1e-8 * S, kink=True))
                 return least > 0, least
-            out = exact_flat(dp, modes, out, classify)
+            out = exact_flat(dp, modes, out, classify, relabel=True, S=S)
     out.sort(key=lambda e: e.energy)
     log.info("equilibria (k = 2): %d found from %d seeds, %d solves in %.2f s", len(out),
              len(seeds), len(cache), time.perf_counter() - t0)
@@ -259,10 +267,20 @@ def _at_roots(dp, grad, hessian, roots, S, known=(), strict=False) -> list:
     return out
 
 
-def _least_rise(grad, s, h, n: int = 16) -> float:
+def _least_rise(grad, s, h, n: int = 16, fine: int = 64, kink: bool = False) -> float:
     """The least one-sided curvature ``e . (∇F(s + h e) - ∇F(s)) / h`` of F at the
-    zero ``s`` over ``n`` directions ``e`` (inadmissible probes left out; inf if
-    none is admissible): a local minimum needs it positive.
+    zero ``s`` over directions ``e`` (inadmissible probes left out; inf if none
+    is admissible): a local minimum needs it positive.  ``kink``: ``s`` may lie
+    on a kink of F (the flat beam at gap 0), where the slice's ``∇F(s)`` is one
+    of many one-sided slopes and is left out: ``e . ∇F(s + h e) / h``, the
+    slope along ``e`` beside ``s`` (a P4 beam pressed flat under a small point
+    force, 8 elements: F fell like -h^2 over 40 degrees of directions, while
+    ``∇F(s + h e) - ∇F(s)`` rose in all, and w = 0 was called stable).
+
+    ``n`` directions first; where all rise, ``fine`` directions, and around each
+    of them that rises least among its neighbours the least by Brent's method
+    (a sampling: a falling cone narrower than the directions' spacing next to no
+    such local least can still be missed).
 
     The central-difference Hessian averages the two sides of a kink of F's
     second derivative: a flat beam on a bed at gap 0 with two modes and no load
@@ -270,16 +288,33 @@ def _least_rise(grad, s, h, n: int = 16) -> float:
     K - 2c > 0 called it stable where lifting off lowers the energy (a
     campaign's P4 beam on a bed of 3e12 N/m^2 at 5e9 N, 8 elements; a path
     called w = 0 unstable at 4e9 N and stable at 5e9 N).  With one mode the
-    two sides are compared already (:func:`.stationary._classify`).
+    two sides are compared already (:func:`.stationary._classify`).  Under a
+    load that presses a beam flat at gap 0, F rises in most directions (the
+    load's work) and falls only in a narrow cone where the beam lifts off its
+    unloaded span: 10 degrees wide for a P2 beam under two point forces, between
+    two of 16 directions, and w = 0 was called stable (a campaign's, 8 elements).
     """
-    g0 = np.asarray(grad(s)[1], float)
-    least = math.inf
-    for t in np.linspace(0.0, 2.0 * math.pi, n, endpoint=False):
+    import scipy.optimize as so
+
+    g0 = np.zeros(2) if kink else np.asarray(grad(s)[1], float)
+
+    def rise(t):
         e = np.array([math.cos(t), math.sin(t)])
         F, d, _, _ = grad(s + h * e)
-        if math.isfinite(F):
-            least = min(least, float(e @ (np.asarray(d, float) - g0)) / h)
-    return least
+        return float(e @ (np.asarray(d, float) - g0)) / h if math.isfinite(F) else math.inf
+
+    least = min(rise(t) for t in np.linspace(0.0, 2.0 * math.pi, n, endpoint=False))
+    if not least > 0:
+        return least
+    ts = np.linspace(0.0, 2.0 * math.pi, fine, endpoint=False)
+    vals = np.array([rise(t) for t in ts])
+    step = ts[1] - ts[0]
+    for i in range(fine):
+        if math.isfinite(vals[i]) and vals[i] <= vals[i - 1] and vals[i] <= vals[(i + 1) % fine]:
+            res = so.minimize_scalar(rise, bounds=(ts[i] - step, ts[i] + step), method="bounded",
+                                     options=dict(xatol=1e-3 * step, maxiter=40))
+            least = min(least, float(res.fun), float(vals[i]))
+    return min(least, float(np.min(vals)))
 
 
 def _images(dp, modes, grad, out, S) -> list:
@@ -374,12 +409,6 @@ def _edge_minima(dp, grad, axes, S, roots, floor, starts=(), step=1e-3) -> list:
                   for t in np.linspace(0, 2 * math.pi, 8, endpoint=False)]
         if min(probes) < F0:
             continue   # (not a minimum at this resolution: a zero of ∇F is step 2's)
-        if min(probes) - F0 <= EDGE_RISE * (abs(F0) + floor):
-            # F flat to round-off over the probes: no minimum shown (a P3 beam at
-            # gap 0 without load, two modes: the slice at s = 0 returned a beam
-            # 2.8e-9 m off w = 0 with F 1e-17 of the scale below its probes, listed
-            # stable and `optimal` beside the exact, unstable w = 0)
-            continue
         size = max(sum(abs(v) for v in dp.energy_parts(u).values()), floor) or 1.0
         resid = float(np.linalg.norm(d)) * e / size
         status = "optimal" if ok and resid <= ROOT_TOL else "inaccurate"
