@@ -815,3 +815,24 @@ def test_one_mode_zero_beside_the_flat_beam_is_the_flat_beam():
     top = max(np.max(np.abs(e.w)) for e in eqs)
     flat = [e for e in eqs if np.max(np.abs(e.w)) <= 1e-6 * top]
     assert len(flat) == 1 and np.all(flat[0].w == 0.0) and flat[0].status == "optimal"
+
+
+def test_two_modes_minimum_on_a_kink_of_f_is_stable():
+    """A campaign's: P3 in a channel at gap 0, no load, two modes (10 elements).  A
+    strict minimum at -1529.192816 J (independently second-order sufficient,
+    curvature +0.079 on the clearly reacting rows' null space; F rises as
+    +5.4 h^2 in every direction) lies on a kink of F's curvature, 1.3e-6 S from a
+    saddle (-1529.192275 J): the central-difference Hessian mixed the kink's two
+    sides (eigenvalues -6.1 and 838) and it was listed unstable.  Every listed
+    equilibrium checked."""
+    from gaocvx import Scene
+    scene = Scene.from_dict({
+        "beam": {"model": "gao", "supports": "P3", "length": 1.8717690661301905,
+                 "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1625604030646863, "width": 1.0},
+        "load": {"axial": 7671466587.690208}, "mesh": {"elements": 10},
+        "obstacle": {"gap": 0.0, "gap_above": 0.0007392790473242678}})
+    eqs = equilibria(scene)
+    _checked(scene, eqs)
+    found = [e for e in eqs if abs(e.energy + 1529.192816) <= 1e-5]
+    assert len(found) == 1 and found[0].stable and found[0].status == "optimal"
+    assert any(not e.stable and abs(e.energy + 1529.192275) <= 1e-5 for e in eqs)
