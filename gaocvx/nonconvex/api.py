@@ -87,8 +87,7 @@ def solve_global_result(scene, elements=None, problem=None, solver=None):
     from ..convex import log_outcome
     from ..solve import _solve_exact, make_result
     from .bounds import check_bounded
-    from .minimum import (MAX_ELEMENTS, MAX_MODES, fast_by_default, fast_eligible,
-                          solve_global)
+    from .minimum import MAX_ELEMENTS, MAX_MODES, solve_certified
     from .modes import MAX_UNSTABLE, unstable_modes
 
     t0 = time.perf_counter()
@@ -128,25 +127,7 @@ def solve_global_result(scene, elements=None, problem=None, solver=None):
         # Not provably below the limit, yet the eigen-solve puts lambda_1 a hair above
         # P (within round-off): the first mode is treated as unstable (c_1 ~ 0).
         modes = unstable_modes(dp, min_k=1)
-    first = dp
-    dp, raw, info = solve_global(dp, modes)
-    if (raw["status"] != "optimal" and n_el <= MAX_ELEMENTS and fast_eligible(first, modes.k)
-            and modes.k <= 3):
-        # The fast path's node bounds can stall where the dense programs certify (a
-        # stiff unilateral bed 0.17 mm below a P4 beam just above P_bar_h: gap 0.71
-        # of the energy scale fast, -3.5e-13 dense; campaign scene 8:3), and the dense
-        # ones where the fast path certifies (a beam pressed flat onto an obstacle,
-        # q = -1e9 N/m 1 mm above it: 2001 nodes, gap 1.1e-7 of the scale dense;
-        # certified fast): on meshes the dense programs take, an uncertified answer is
-        # solved again by the other method.  Not beyond three modes: there the dense
-        # bounds stall at Clarabel's accuracy (k = 5: 1.7e-7 of the scale, above
-        # GAP_TOL), and a second search of up to minimum.time_limit would end the same.
-        fast = not fast_by_default(first, modes.k)
-        log.info("global: not certified (%s); again by the %s", raw["message"],
-                 "fast path" if fast else "dense programs")
-        again = solve_global(first, modes, fast=fast)
-        if again[1]["status"] == "optimal":
-            dp, raw, info = again
+    dp, raw, info = solve_certified(dp, modes)
     alternatives = [{"energy": a["energy"], "amplitudes": a["amplitudes"], **_physical(dp, a["u"])}
                     for a in info.pop("alternatives")]
     info["alternatives"] = alternatives

@@ -5,11 +5,12 @@ The reduced function's residuals (``|F'|`` times an amplitude) cannot see a
 deflection that is no equilibrium of the beam; :func:`kkt_point` checks the
 global method's optimality conditions on it.  With two unstable modes the
 plane of amplitudes is only sampled (:mod:`.stationary2`): the certified
-global minimiser, an equilibrium, is among its starts (:func:`global_starts`).
+global minimiser, an equilibrium, is among its starts (:func:`global_minimisers`).
 """
 
 from __future__ import annotations
 
+import copy
 import logging
 import math
 
@@ -17,22 +18,28 @@ import numpy as np
 
 from ..errors import SceneError, SolverError
 
-__all__ = ["at_global", "check_contact", "exact_flat", "global_starts", "kkt_point"]
+__all__ = ["at_global", "check_contact", "exact_flat", "global_minimisers", "kkt_point"]
 
 log = logging.getLogger(__name__)
 
 
-def global_starts(dp, modes) -> list:
-    """The certified global minimiser's amplitudes (and its images'), in ``dp``'s units.
+def global_minimisers(dp, modes) -> list:
+    """The certified global minimiser (and its images) as stable
+    :class:`.equilibrium.Equilibrium` objects, amplitudes in ``dp``'s units.
 
     With two modes and an obstacle the plane's sampling is no proof; the global
     minimum, an equilibrium, is then certain to be among the starts (a trial's
     P1 and P2 beams in channels: the global minimum was missed in 3 of 40 scenes).
-    A failed or uncertified solve gives no start (the sampling stands alone).
+    A failed or uncertified solve gives none (the sampling stands alone);
+    uncertified, it is tried once more by the other node programs, as
+    ``solve(scene, "global")`` does (:func:`.minimum.solve_certified`: a P3 beam
+    in a channel at gap 0 under a load table, 12 elements, was certified so).
+    Their ``residual`` is the certificate's stationarity, their curvature NaN.
     """
-    from .minimum import solve_global
+    from .equilibrium import Equilibrium
+    from .minimum import solve_certified
     try:
-        dpg, raw, info = solve_global(dp, modes)
+        dpg, raw, info = solve_certified(dp, modes)
     except (SceneError, SolverError, ArithmeticError, np.linalg.LinAlgError) as exc:
         # (only a start: the sampling goes on without it)
         log.warning("equilibria: no global minimiser to start from (%s)", exc)
@@ -40,27 +47,44 @@ def global_starts(dp, modes) -> list:
     if raw.get("status") != "optimal":
         return []
     r = dpg.W / dp.W
-    return [np.asarray(a["amplitudes"], float) * r for a in [info] + info["alternatives"]]
+    out = []
+    for a in [{"u": raw["u"], "amplitudes": info["amplitudes"]}] + info["alternatives"]:
+        w, slope = dpg.to_physical(a["u"])
+        out.append(Equilibrium(float(dpg.energy(a["u"]) * dpg.E0), True,
+                               [float(x) * r for x in a["amplitudes"]], dp.x.copy(), w, slope,
+                               float(raw["residual"]["stationarity"]), "optimal", float(dp.P),
+                               math.nan, float(dp.W)))
+    return out
 
 
-def at_global(dp, prog, out, starts, F, S) -> None:
+def at_global(dp, prog, out, minimisers, F, S) -> None:
     """The listed equilibria that are the certified global minimiser: stable
     (``out`` in place).
 
-    An equilibrium within 1e-6 ``S`` of one of the ``starts``
-    (:func:`global_starts`) whose ``F`` is no higher than the start's (1e-10 of
+    An equilibrium within 1e-6 ``S`` of one of the ``minimisers``' amplitudes
+    (:func:`global_minimisers`) whose ``F`` is no higher than there (1e-10 of
     its size) is a global minimiser, so a local one, whatever its probes say;
     ``optimal`` if it passes :func:`kkt_point`.  (A P3 beam in a channel at gap
     0 without load, two modes, 10 elements: the certified global minimiser,
     lying on the floor by the clamp and held at the ceiling at the free end,
     was listed unstable and ``inaccurate``: F's Hessian by central differences
     straddled the contacts' kinks, and Newton's residual stalled at 1.2e-6.)
+
+    Where none within 1e-6 ``S`` is then ``optimal`` and the slice at the
+    minimiser's amplitudes passes :func:`kkt_point`, the minimiser itself
+    replaces them (a P3 beam in a channel at gap 0 under a load table, 12
+    elements: the global minimiser was listed only as an `inaccurate` point
+    6e-13 S from it, F higher by 8e-9 of it, Newton's method stalled at a kink;
+    and the slice there returned a beam 1e-6 of its energy higher than the
+    certified one, which is listed instead).
     """
-    for s in starts:
+    for m in minimisers:
+        s = np.asarray(m.amplitudes, float)
         top = F(s)
-        for e in out:
-            if e is None or np.linalg.norm(np.asarray(e.amplitudes) - s) > 1e-6 * S:
-                continue
+        near = [i for i, e in enumerate(out) if e is not None
+                and np.linalg.norm(np.asarray(e.amplitudes) - s) <= 1e-6 * S]
+        for i in near:
+            e = out[i]
             if not F(e.amplitudes) <= top + 1e-10 * abs(top):
                 continue
             if not e.stable:
@@ -70,6 +94,12 @@ def at_global(dp, prog, out, starts, F, S) -> None:
             e.stable = True
             if e.status != "optimal" and kkt_point(dp, prog, e.amplitudes):
                 e.status = "optimal"
+        if any(out[i].status == "optimal" for i in near) or not kkt_point(dp, prog, s):
+            continue
+        log.info("equilibria: the certified global minimiser at s = %s listed", s)
+        for i in sorted(near, reverse=True):
+            del out[i]
+        out.append(copy.copy(m))
 
 
 def check_contact(dp, prog, out) -> None:

@@ -53,7 +53,7 @@ from ..scene import check_solve_arguments, numbers_of, whole
 from .bounds import check_bounded, equilibrium_box, zoom_boxes
 from .contours import sampled_roots
 from .equilibrium import Equilibrium
-from .obstacle_checks import check_contact, exact_flat, global_starts
+from .obstacle_checks import check_contact, exact_flat, global_minimisers
 
 __all__ = ["Equilibrium", "equilibria", "GRID", "MAX_GRID"]
 
@@ -191,8 +191,10 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         lo, hi = np.maximum(lo, ranged.smin), np.minimum(hi, ranged.smax)
     if modes.k == 2:
         from .stationary2 import find_plane
+        glob = global_minimisers(dp, modes) if obstacle else []
         out = find_plane(dp, prog, S, floor=scene_energy(dp, modes), modes=modes,
-                         starts=global_starts(dp, modes) if obstacle else (), box=(lo, hi))
+                         starts=[np.asarray(e.amplitudes, float) for e in glob], box=(lo, hi),
+                         minimisers=glob)
     else:
         points = np.asarray(seeds, float) / dp.W
         if obstacle:

@@ -14,7 +14,7 @@ every zero is found, so this search is a careful sampling, not a proof:
    seeds Newton's method on ``∇F = 0`` (the Hessian of F by central
    differences of the envelope gradient), damped to stay in the square, and
    so do ``s = 0`` and the given starts (with an obstacle: the certified global
-   minimiser's amplitudes, :func:`.obstacle_checks.global_starts`); on lines of
+   minimiser's amplitudes, :func:`.obstacle_checks.global_minimisers`); on lines of
    symmetry ``s_j = 0`` (``∂F/∂s_j`` zero to round-off along them) the zeros of
    the other component are found along the line (:func:`.contours.line_zeros`)
    and polished by Newton's method; and the ends of descents of ``F`` from every
@@ -45,7 +45,8 @@ every zero is found, so this search is a careful sampling, not a proof:
    where mesh and supports are symmetric, seed steps 2 and 4 again, and every
    equilibrium called ``optimal`` must pass the global method's optimality
    conditions (:func:`.obstacle_checks.check_contact`), else it is ``inaccurate``;
-   one at the certified global minimiser's amplitudes is stable
+   one at the certified global minimiser's amplitudes is stable, and the
+   certified minimiser is listed itself where no `optimal` entry is that close
    (:func:`.obstacle_checks.at_global`);
    and the flat beam ``w = 0`` is checked as an equilibrium of its own
    (:func:`.obstacle_checks.exact_flat`).
@@ -85,7 +86,7 @@ GRID2 = 25  # odd: (0, 0) is a grid point
 
 
 def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
-               starts=(), box=None) -> list:
+               starts=(), box=None, minimisers=()) -> list:
     """Every zero of ``∇F`` found in ``[-S, S]^2`` (see the module's notes).
 
     ``floor`` [in the program's energy unit]: the smallest energy scale residuals are
@@ -95,9 +96,12 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
     by default ``prog``'s own, if it has them), as for k = 1, and
     finer grids span the boxes where the unstable modes reach the obstacle
     (:func:`.bounds.zoom_boxes`, from ``modes``); ``starts`` (amplitudes: the
-    certified global minimiser's) seed Newton's method and the edge minima.
-    With an obstacle the zeros on the zero curves of one component of ``∇F``
-    are added on every grid (:func:`.contours.curve_zeros`).
+    certified global minimiser's) seed Newton's method and the edge minima, and
+    ``minimisers`` (:func:`.obstacle_checks.global_minimisers`: the certified
+    global minimiser, as an equilibrium) are listed stable
+    (:func:`.obstacle_checks.at_global`).  With an obstacle the zeros on the
+    zero curves of one component of ``∇F`` are added on every grid
+    (:func:`.contours.curve_zeros`).
     """
     t0 = time.perf_counter()
     cache = {}
@@ -187,8 +191,7 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
             out += _at_roots(dp, grad, hessian, _newton(grad, hessian, images, S), S, found())
             out += _edge_minima(dp, grad, None, S, found(), floor, images)
         check_contact(dp, prog, out)
-        at_global(dp, prog, out, [np.asarray(x, float) for x in starts],
-                  lambda s: grad(np.asarray(s, float))[0], S)
+        at_global(dp, prog, out, minimisers, lambda s: grad(np.asarray(s, float))[0], S)
         if modes is not None:
             def classify(s):
                 # w = 0 at a kink of F: the slopes beside it, in directions refined
