@@ -300,3 +300,40 @@ def test_two_modes_flat_beam_at_gap_zero_without_load_is_unstable(data):
     assert len(flat) == 1 and not flat[0].stable and flat[0].curvature < 0
     assert any(e.stable and e.status == "optimal" for e in eqs)
     _checked(scene, eqs)
+
+
+def test_near_the_limit_on_a_bonded_bed_all_three_equilibria_are_listed():
+    """A helper's campaign: P4 on a bonded bed, 1e-4 above its limit under a
+    symmetric load table (one mode, antisymmetric; 10 elements).  The bed leaves
+    the equilibrium box no lambda_1 to use (S = 754 against amplitudes of 4.5):
+    the mirror pair of global minima and the symmetric unstable beam between
+    them lay within one step of the grid, and one minimum was listed, not its
+    mirror image (the certified global minimiser).  All three are listed, the
+    pair mirror images of each other at the certified energy; each checked
+    against the independent energy."""
+    import types
+    from test_equilibria_obstacle_campaign import check
+    scene = Scene.from_dict({
+        "beam": {"model": "gao", "supports": "P4", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                 "half_thickness": 0.1, "width": 1.0},
+        "load": {"q": [[0.0, 6682.460504880699], [0.40786677306362823, 474701.2471140638],
+                       [0.5921332269363717, 474701.2471140638], [1.0, 6682.460504880699]],
+                 "axial": 7471578398.98209},
+        "mesh": {"elements": 10},
+        "foundation": {"gap": 0.00010981695920347309, "stiffness": 143607070346.75012,
+                       "kind": "bilateral"}})
+    eqs = equilibria(scene)
+    assert [e.stable for e in eqs] == [True, True, False]
+    assert all(e.status == "optimal" for e in eqs)
+    g = solve(scene, "global")
+    assert g.status == "optimal"
+    top = np.max(np.abs(g.w))
+    for e in eqs[:2]:
+        assert e.energy == pytest.approx(g.energy, rel=1e-9)
+    assert np.max(np.abs(eqs[0].w - eqs[1].w[::-1])) <= 1e-6 * top
+    assert min(np.max(np.abs(e.w - g.w)) for e in eqs[:2]) <= 1e-6 * top
+    assert np.max(np.abs(eqs[2].w - eqs[2].w[::-1])) <= 1e-6 * top     # the symmetric one
+    rng = np.random.default_rng(0)
+    for e in eqs:
+        c = check(scene, e, rng)
+        assert not c["violations"] and c["verdict"] == ("stable" if e.stable else "unstable"), c

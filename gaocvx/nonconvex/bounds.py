@@ -31,7 +31,8 @@ import numpy as np
 
 from ..errors import SceneError
 
-__all__ = ["t_max", "amplitude_box", "equilibrium_box", "check_bounded", "zoom_boxes"]
+__all__ = ["t_max", "amplitude_box", "equilibrium_box", "check_bounded", "zoom_boxes",
+           "mode_amplitudes", "estimate_boxes"]
 
 
 def t_max(a: float, p: float, c0: float, upper: float) -> float:
@@ -180,3 +181,34 @@ def zoom_boxes(dp, modes, lo, hi) -> list:
             boxes.append((a, b))
             sizes.append(half)
     return boxes
+
+
+def mode_amplitudes(dp, modes, count: int | None = None) -> np.ndarray:
+    """The one-mode estimates ``A_j = sqrt(3 (p - lambda_j) / (a int phi_j'^4))`` of
+    the first ``count`` (default: the unstable) modes' buckled amplitudes
+    (non-dimensional, G-normalised; 0 where ``p <= lambda_j``): nonconvex.md."""
+    k = modes.k if count is None else count
+    slopes = dp.B1 @ modes.phi[:, :k]
+    quartic = np.asarray(dp.wq_gao @ slopes**4, float)
+    return np.sqrt(np.maximum(3.0 * (dp.p - np.asarray(modes.lam[:k], float))
+                              / (dp.a * quartic), 0.0))
+
+
+def estimate_boxes(dp, modes, lo, hi) -> list:
+    """The box of amplitudes where the one-mode estimates put the buckled beam:
+    half-width four times the largest :func:`mode_amplitudes`, when that is less
+    than a quarter of the grid's range (else none).
+
+    The equilibrium box bounds the amplitudes, and can be far wider than the
+    equilibria: with a bonded foundation it has no lambda_1 to use, and a P4 beam
+    on one, 1e-4 above its limit under a symmetric load table (one mode, 10
+    elements), had all three equilibria (s = -4.5, 0, 4.5) within one step of a
+    121-point grid over S = 754; one was found, and not its mirror image, the
+    certified global minimiser.  Used by both searches, as :func:`zoom_boxes`.
+    """
+    half = 4.0 * float(np.max(mode_amplitudes(dp, modes), initial=0.0))
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    a, b = np.maximum(lo, -half), np.minimum(hi, half)
+    if half > 0.0 and np.all(half < 0.25 * (hi - lo)) and np.all(b > a):
+        return [(a, b)]
+    return []

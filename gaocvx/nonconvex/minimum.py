@@ -54,7 +54,7 @@ from . import bnb, dual
 from .alternatives import other_minimisers
 from .basin import BasinProver
 from .bnb import branch_and_bound
-from .bounds import amplitude_box, check_bounded, load_constant
+from .bounds import amplitude_box, check_bounded, load_constant, mode_amplitudes
 from .certificate import certify_contact
 from .modes import unstable_modes
 from .node import NodeProgram
@@ -109,9 +109,7 @@ BASIN_ELEMENTS = 1024
 
 def one_mode_amplitude(dp, modes) -> float:
     """The one-mode estimate ``A`` of the buckled amplitude (non-dimensional, G-normalised)."""
-    slopes = dp.B1 @ modes.phi[:, 0]
-    quartic = float(dp.wq_gao @ slopes**4)
-    return math.sqrt(max(3.0 * (dp.p - modes.lam[0]) / (dp.a * quartic), 0.0))
+    return float(mode_amplitudes(dp, modes, 1)[0])
 
 
 def scene_energy(dp, modes) -> float:

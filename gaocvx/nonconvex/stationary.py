@@ -50,7 +50,7 @@ import numpy as np
 from ..discrete import DiscreteProblem
 from ..errors import SceneError, SolverError
 from ..scene import check_solve_arguments, numbers_of, whole
-from .bounds import check_bounded, equilibrium_box, zoom_boxes
+from .bounds import check_bounded, equilibrium_box, estimate_boxes, zoom_boxes
 from .contours import sampled_roots
 from .equilibrium import Equilibrium
 from .obstacle_checks import check_contact, exact_flat, global_minimisers
@@ -197,6 +197,10 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                          minimisers=glob)
     else:
         points = np.asarray(seeds, float) / dp.W
+        # a finer grid where the one-mode estimate puts the buckled beam, when the
+        # box is far wider (bounds.estimate_boxes)
+        points = np.concatenate([points] + [np.linspace(a[0], b[0], grid)
+                                            for a, b in estimate_boxes(dp, modes, lo, hi)])
         if obstacle:
             # finer grids where the mode reaches a surface of the obstacle, as
             # with two modes (a P3 beam held at a ceiling 1.8e-5 m up, 48 elements:

@@ -9,7 +9,9 @@ every zero is found, so this search is a careful sampling, not a proof:
    an obstacle, of its part within the admissible amplitudes' box), with
    ``s = 0`` exactly among the points; with an obstacle or channel also on
    finer grids of the boxes where a mode alone reaches a surface of it
-   (:func:`.bounds.zoom_boxes`);
+   (:func:`.bounds.zoom_boxes`); and on a finer grid of the box where the
+   one-mode estimates put the buckled beam, when it is far smaller than the
+   square (:func:`.bounds.estimate_boxes`);
 2. every grid cell on whose corners both components of ``∇F`` change sign
    seeds Newton's method on ``∇F = 0`` (the Hessian of F by central
    differences of the envelope gradient), damped to stay in the square, and
@@ -71,7 +73,7 @@ import time
 
 import numpy as np
 
-from .bounds import zoom_boxes
+from .bounds import estimate_boxes, zoom_boxes
 from .contours import curve_zeros, line_zeros
 from .descents import descents as _descents, in_square as _in_square, passes as _passes
 from .equilibrium import Equilibrium
@@ -139,6 +141,9 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
     lo = np.maximum(-S, np.asarray(box[0], float))
     hi = np.minimum(S, np.asarray(box[1], float))
     grids = [[_axis(lo[j], hi[j], grid) for j in range(2)]]
+    if modes is not None:
+        grids += [[_axis(a[j], b[j], grid) for j in range(2)]
+                  for a, b in estimate_boxes(dp, modes, lo, hi)]
     if dp.contact == "obstacle" and modes is not None:
         grids += [[_axis(a[j], b[j], grid) for j in range(2)]
                   for a, b in zoom_boxes(dp, modes, lo, hi)]
