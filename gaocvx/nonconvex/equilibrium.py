@@ -36,7 +36,8 @@ class Equilibrium:
         ``|F'(s)| |s|`` relative to the energy scale (0 for the convex case);
         at a kink of ``F`` or an end of the admissible amplitudes (an obstacle
         holding the beam), ``|F'|`` times the width of the bracket that holds
-        the equilibrium.
+        the equilibrium; for the certified global minimiser listed from the
+        global method (with an obstacle), its certificate's stationarity.
     status : str
         "optimal" when the fixed-amplitude solve and the zero are accurate,
         else "inaccurate".
@@ -45,8 +46,10 @@ class Equilibrium:
     curvature : float
         The least second derivative of the reduced function ``F`` at the
         equilibrium [program units]: ``F''`` with one mode, with two the least
-        Hessian eigenvalue or one-sided directional curvature; NaN at a kink or
-        an edge of the admissible amplitudes.
+        Hessian eigenvalue or one-sided directional curvature (on a kink of F
+        through a zero the least one-sided one); NaN at an edge of the
+        admissible amplitudes, or where the certified global minimiser's
+        label replaced the probes'.
     W : float
         The deflection scale [m] of the amplitudes (see :attr:`amplitude_m`).
     """

@@ -34,7 +34,10 @@ def global_minimisers(dp, modes) -> list:
     uncertified, it is tried once more by the other node programs, as
     ``solve(scene, "global")`` does (:func:`.minimum.solve_certified`: a P3 beam
     in a channel at gap 0 under a load table, 12 elements, was certified so).
-    Their ``residual`` is the certificate's stationarity, their curvature NaN.
+    Their ``residual`` is the certificate's stationarity, their curvature NaN;
+    the certified minimiser is ``optimal``, its alternatives (mirror images or
+    other contact states within the certified gap, without a certificate of
+    their own) ``inaccurate``: starts only.
     """
     from .equilibrium import Equilibrium
     from .minimum import solve_certified
@@ -48,11 +51,13 @@ def global_minimisers(dp, modes) -> list:
         return []
     r = dpg.W / dp.W
     out = []
-    for a in [{"u": raw["u"], "amplitudes": info["amplitudes"]}] + info["alternatives"]:
+    for i, a in enumerate([{"u": raw["u"], "amplitudes": info["amplitudes"]}]
+                          + info["alternatives"]):
         w, slope = dpg.to_physical(a["u"])
         out.append(Equilibrium(float(dpg.energy(a["u"]) * dpg.E0), True,
                                [float(x) * r for x in a["amplitudes"]], dp.x.copy(), w, slope,
-                               float(raw["residual"]["stationarity"]), "optimal", float(dp.P),
+                               float(raw["residual"]["stationarity"]),
+                               "optimal" if i == 0 else "inaccurate", float(dp.P),
                                math.nan, float(dp.W)))
     return out
 
@@ -70,9 +75,10 @@ def at_global(dp, prog, out, minimisers, F, S) -> None:
     was listed unstable and ``inaccurate``: F's Hessian by central differences
     straddled the contacts' kinks, and Newton's residual stalled at 1.2e-6.)
 
-    Where none within 1e-6 ``S`` is then ``optimal`` and the slice at the
-    minimiser's amplitudes passes :func:`kkt_point`, the minimiser itself
-    replaces them (a P3 beam in a channel at gap 0 under a load table, 12
+    Where none within 1e-6 ``S`` is then ``optimal``, stable and as low, and the
+    slice at the minimiser's amplitudes passes :func:`kkt_point`, the certified
+    minimiser itself (not its alternatives) is listed, in place of the entries
+    there that are not ``optimal`` (a P3 beam in a channel at gap 0 under a load table, 12
     elements: the global minimiser was listed only as an `inaccurate` point
     6e-13 S from it, F higher by 8e-9 of it, Newton's method stalled at a kink;
     and the slice there returned a beam 1e-6 of its energy higher than the
@@ -94,11 +100,18 @@ def at_global(dp, prog, out, minimisers, F, S) -> None:
             e.stable = True
             if e.status != "optimal" and kkt_point(dp, prog, e.amplitudes):
                 e.status = "optimal"
-        if any(out[i].status == "optimal" for i in near) or not kkt_point(dp, prog, s):
+        # (only the certified one; where no `optimal` stable entry as low is that
+        # close: an `optimal` saddle 1.3e-6 S beside a minimum is another
+        # equilibrium, and is kept)
+        if m.status != "optimal" or any(
+                out[i].status == "optimal" and out[i].stable
+                and F(out[i].amplitudes) <= top + 1e-10 * abs(top) for i in near) \
+                or not kkt_point(dp, prog, s):
             continue
         log.info("equilibria: the certified global minimiser at s = %s listed", s)
         for i in sorted(near, reverse=True):
-            del out[i]
+            if out[i].status != "optimal":
+                del out[i]
         out.append(copy.copy(m))
 
 

@@ -48,8 +48,8 @@ every zero is found, so this search is a careful sampling, not a proof:
    equilibrium called ``optimal`` must pass the global method's optimality
    conditions (:func:`.obstacle_checks.check_contact`), else it is ``inaccurate``;
    one at the certified global minimiser's amplitudes is stable, and the
-   certified minimiser is listed itself where no `optimal` entry is that close
-   (:func:`.obstacle_checks.at_global`);
+   certified minimiser is listed itself where no `optimal` stable entry as low is
+   that close (:func:`.obstacle_checks.at_global`);
    and the flat beam ``w = 0`` is checked as an equilibrium of its own
    (:func:`.obstacle_checks.exact_flat`).
 
@@ -293,9 +293,12 @@ def _curvature(grad, H, s, h) -> float:
     channel at gap 0 with two modes (10 elements) had a strict minimum (F rising
     as +5.4 h^2 in every direction, independently second-order sufficient)
     with eigenvalues -6.1 and 838, listed unstable; its saddle lies 1.3e-6 S
-    beside it.  There the zero is a minimum if F rises, beyond round-off, in
-    every probe direction and both ways along the Hessian's falling eigenvector,
-    at ``h`` and ``h / 10``; else the least eigenvalue stands.
+    beside it.  There the zero is a minimum if F rises in every probe direction
+    and both ways along the Hessian's falling eigenvector, at ``h`` and
+    ``h / 10``, by more than 1e-12 of |F| and with its least rise over
+    ``step^2`` at ``h / 10`` at least a quarter of that at ``h`` (a kink's
+    quadratic rise keeps it; a nearly flat saddle's, a quartic term's over
+    ``-eps x^2``, collapses); else the least eigenvalue stands.
     """
     eig, vec = np.linalg.eigh(H)
     least = _least_rise(grad, s, h)
@@ -304,11 +307,13 @@ def _curvature(grad, H, s, h) -> float:
     F0 = grad(s)[0]
     dirs = [np.array([math.cos(t), math.sin(t)])
             for t in np.linspace(0.0, 2.0 * math.pi, 64, endpoint=False)] + [vec[:, 0], -vec[:, 0]]
+    rises = []
     for step in (h, 0.1 * h):
-        for e in dirs:
-            if not grad(s + step * e)[0] - F0 > 1e-12 * abs(F0):
-                return float(eig[0])
-    return least
+        rise = min(grad(s + step * e)[0] - F0 for e in dirs)
+        if not rise > 1e-12 * abs(F0):
+            return float(eig[0])
+        rises.append(rise / step**2)
+    return least if rises[1] >= 0.25 * rises[0] else float(eig[0])
 
 
 def _least_rise(grad, s, h, n: int = 16, fine: int = 64, kink: bool = False) -> float:
