@@ -196,18 +196,16 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                          starts=[np.asarray(e.amplitudes, float) for e in glob], box=(lo, hi),
                          minimisers=glob)
     else:
-        points = np.asarray(seeds, float) / dp.W
-        # a finer grid where the one-mode estimate puts the buckled beam, when the
-        # box is far wider (bounds.estimate_boxes)
-        points = np.concatenate([points] + [np.linspace(a[0], b[0], grid)
-                                            for a, b in estimate_boxes(dp, modes, lo, hi)])
-        if obstacle:
-            # finer grids where the mode reaches a surface of the obstacle, as
-            # with two modes (a P3 beam held at a ceiling 1.8e-5 m up, 48 elements:
-            # that stable equilibrium and an unstable one lay within one step of
-            # the grid over S = 82 times the amplitude there -- extreme-scale campaign)
-            points = np.concatenate([points] + [np.linspace(a[0], b[0], grid)
-                                                for a, b in zoom_boxes(dp, modes, lo, hi)])
+        # finer grids where the one-mode estimate puts the buckled beam, when the
+        # box is far wider (bounds.estimate_boxes), and, with an obstacle, where
+        # the mode reaches a surface of it, as with two modes (a P3 beam held at
+        # a ceiling 1.8e-5 m up, 48 elements: that stable equilibrium and an
+        # unstable one lay within one step of the grid over S = 82 times the
+        # amplitude there -- extreme-scale campaign)
+        boxes = estimate_boxes(dp, modes, lo, hi) + (zoom_boxes(dp, modes, lo, hi)
+                                                     if obstacle else [])
+        points = np.concatenate([np.asarray(seeds, float) / dp.W]
+                                + [np.linspace(a[0], b[0], grid) for a, b in boxes])
         out = _find(dp, prog, S, points, grid, float(lo[0]), float(hi[0]),
                     scene_energy(dp, modes))
         if obstacle:

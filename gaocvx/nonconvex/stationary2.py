@@ -140,13 +140,9 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
         box = (getattr(prog, "smin", [-S, -S]), getattr(prog, "smax", [S, S]))
     lo = np.maximum(-S, np.asarray(box[0], float))
     hi = np.minimum(S, np.asarray(box[1], float))
-    grids = [[_axis(lo[j], hi[j], grid) for j in range(2)]]
-    if modes is not None:
-        grids += [[_axis(a[j], b[j], grid) for j in range(2)]
-                  for a, b in estimate_boxes(dp, modes, lo, hi)]
-    if dp.contact == "obstacle" and modes is not None:
-        grids += [[_axis(a[j], b[j], grid) for j in range(2)]
-                  for a, b in zoom_boxes(dp, modes, lo, hi)]
+    boxes = [] if modes is None else estimate_boxes(dp, modes, lo, hi) + (
+        zoom_boxes(dp, modes, lo, hi) if dp.contact == "obstacle" else [])
+    grids = [[_axis(a[j], b[j], grid) for j in range(2)] for a, b in [(lo, hi)] + boxes]
     seeds = [np.asarray(x, float) for x in starts]
     for axes in grids:
         seeds += _grid_seeds(grad, axes)
