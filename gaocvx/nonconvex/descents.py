@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from .contours import sampled_roots
+from .equilibrium import same_point
 
 __all__ = ["descents", "flow", "passes", "in_square"]
 
@@ -106,7 +107,7 @@ def passes(grad, new, minima, S) -> list:
     ts = np.union1d(tau, 1.0 - tau)
     seeds = []
     for a in map(np.asarray, new):
-        others = [np.asarray(b) for b in minima if np.linalg.norm(np.asarray(b) - a) > 1e-6 * S]
+        others = [np.asarray(b) for b in minima if not same_point(b, a, S)]
         if not others:
             continue
         e = min(others, key=lambda b: float(np.linalg.norm(b - a))) - a

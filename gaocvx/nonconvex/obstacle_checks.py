@@ -17,6 +17,7 @@ import math
 import numpy as np
 
 from ..errors import SceneError, SolverError
+from .equilibrium import Equilibrium, same_point
 
 __all__ = ["at_global", "check_contact", "exact_flat", "global_minimisers", "kkt_point"]
 
@@ -39,7 +40,6 @@ def global_minimisers(dp, modes) -> list:
     other contact states within the certified gap, without a certificate of
     their own) ``inaccurate``: starts only.
     """
-    from .equilibrium import Equilibrium
     from .minimum import solve_certified
     try:
         dpg, raw, info = solve_certified(dp, modes)
@@ -88,7 +88,7 @@ def at_global(dp, prog, out, minimisers, F, S) -> None:
         s = np.asarray(m.amplitudes, float)
         top = F(s)
         near = [i for i, e in enumerate(out) if e is not None
-                and np.linalg.norm(np.asarray(e.amplitudes) - s) <= 1e-6 * S]
+                and same_point(e.amplitudes, s, S)]
         for i in near:
             e = out[i]
             if not F(e.amplitudes) <= top + 1e-10 * abs(top):
@@ -218,7 +218,6 @@ def exact_flat(dp, modes, out, classify, relabel: bool = False, S: float = 0.0) 
     from ..certificate import passes
     from ..mixed import MixedForm
     from .certificate import certify_contact
-    from .equilibrium import Equilibrium
     from .node import obstacle_rows
 
     rows, levels = obstacle_rows(dp)
@@ -232,12 +231,12 @@ def exact_flat(dp, modes, out, classify, relabel: bool = False, S: float = 0.0) 
         return out
     top = max((float(np.max(np.abs(e.w))) for e in out if e is not None), default=0.0)
     near = max(floor * dp.W, 1e-9 * top)
-    # (or within the searches' merging distance, 1e-6 S, of s = 0: a one-mode zero
+    # (or within the searches' merging distance (MERGE S) of s = 0: a one-mode zero
     # 4.3e-9 from it, 5.8e-12 m off w = 0, no KKT point, was listed beside it --
     # P1 in a channel at gap 0 under two point forces, 10 elements)
     flat = [e for e in out if e is not None and (
         float(np.max(np.abs(e.w))) <= near
-        or float(np.linalg.norm(e.amplitudes)) <= 1e-6 * S)]
+        or same_point(e.amplitudes, 0.0, S))]
     energy = float(dp.energy(u0) * dp.E0)
     zeros = np.zeros(len(dp.x))
     if flat:

@@ -76,7 +76,7 @@ import numpy as np
 from .bounds import estimate_boxes, zoom_boxes
 from .contours import curve_zeros, line_zeros
 from .descents import descents as _descents, in_square as _in_square, passes as _passes
-from .equilibrium import Equilibrium
+from .equilibrium import Equilibrium, same_point
 from .obstacle_checks import at_global, check_contact, exact_flat
 from .stationary import ROOT_TOL
 
@@ -256,7 +256,7 @@ def _at_roots(dp, grad, hessian, roots, S, known=(), strict=False) -> list:
     """
     out, have = [], [np.asarray(k, float) for k in known]
     for r in roots:
-        if any(np.linalg.norm(r - h) <= 1e-6 * S for h in have):
+        if any(same_point(r, h, S) for h in have):
             continue
         F, d, u, ok = grad(r)
         size = sum(abs(v) for v in dp.energy_parts(u).values()) or 1.0
@@ -373,7 +373,7 @@ def _images(dp, modes, grad, out, S) -> list:
         u = grad(np.asarray(e.amplitudes, float))[2]
         for image in reflections(dp, u)[:1]:
             s = np.asarray(modes.phi.T @ (dp.G @ image), float)
-            if not any(np.linalg.norm(s - h) <= 1e-6 * S for h in have + images):
+            if not any(same_point(s, h, S) for h in have + images):
                 images.append(s)
     return images
 
@@ -445,8 +445,8 @@ def _edge_minima(dp, grad, axes, S, roots, floor, starts=(), step=1e-3) -> list:
                                            maxiter=400))
         s = np.asarray(res.x, float)
         if not math.isfinite(f(s)) or \
-                any(np.linalg.norm(s - np.asarray(r)) <= 1e-6 * S for r in roots) or \
-                any(np.linalg.norm(s - np.asarray(e.amplitudes)) <= 1e-6 * S for e in out):
+                any(same_point(s, r, S) for r in roots) or \
+                any(same_point(s, e.amplitudes, S) for e in out):
             continue
         F0, d, u, ok = grad(s)
         e = 1e-9 * S
