@@ -46,8 +46,8 @@ from ..certificate import passes, shortfall
 from ..linalg import one_blas_thread
 from ..tolerances import STATIONARITY_TOL, TOUCH_TOL, complementarity
 
-__all__ = ["amplitude_range", "contact_polish", "certify", "certify_contact", "RANGE_PAD",
-           "POLISH_BUDGET"]
+__all__ = ["amplitude_range", "contact_polish", "certify", "certify_contact", "lp_ranges",
+           "padded", "RANGE_PAD", "POLISH_BUDGET"]
 
 log = logging.getLogger(__name__)
 
@@ -105,26 +105,52 @@ def amplitude_range(prog):
     """Each amplitude's range ``(lo, hi)`` over the admissible set (LP), widened by RANGE_PAD.
 
     ``min / max  B_i z`` subject to the linking constraints and the obstacle's
-    rows, by HiGHS; each end from the dual solution (a bound by weak duality,
-    its residual checked), widened by RANGE_PAD.  Unbounded sides are infinite,
-    and so is a side HiGHS fails on or whose dual residual is not round-off (a
-    weaker range, never a narrower one).
+    rows, by :func:`lp_ranges`, widened by RANGE_PAD.  Unbounded sides are
+    infinite, and so is a side HiGHS fails on or whose dual residual is not
+    round-off (a weaker range, never a narrower one).
     """
-    mf, k = prog.mf, prog.k
+    mf = prog.mf
+    lo, hi = lp_ranges(prog.B, -mf.A, mf.gap(np.zeros(mf.n)), mf.C, -mf.link(np.zeros(mf.n)))
+    return padded(lo + prog.s_origin, hi + prog.s_origin)
+
+
+def padded(lo, hi):
+    """``(lo, hi)`` widened by RANGE_PAD relative to 1 + their largest finite end."""
+    ends = np.r_[lo, hi]
+    size = 1.0 + np.max(np.abs(ends[np.isfinite(ends)]), initial=0.0)
+    return lo - RANGE_PAD * size, hi + RANGE_PAD * size
+
+
+def lp_ranges(D, A_ub, b_ub, A_eq, b_eq):
+    """Bounds ``lo_i <= min d_i'z`` and ``hi_i >= max d_i'z`` over ``{A_ub z <= b_ub, A_eq z = b_eq}``.
+
+    One linear program (HiGHS) per row ``d_i`` of ``D`` and side; each end is
+    taken from the dual solution, a bound by weak duality whose residual is
+    checked.  A side that is unbounded, that HiGHS fails on, or whose dual
+    residual is not round-off is infinite (a weaker range, never a narrower one).
+
+    Examples
+    --------
+    >>> lo, hi = lp_ranges(np.eye(2), np.array([[1.0, 1.0], [-1.0, 0.0], [0.0, -1.0]]),
+    ...                    np.array([1.0, 0.0, 0.0]), np.zeros((0, 2)), np.zeros(0))
+    >>> np.allclose(lo, 0.0) and np.allclose(hi, 1.0)     # the triangle's sides
+    True
+    """
+    D = np.atleast_2d(np.asarray(D, float))
+    k = D.shape[0]
     lo, hi = np.full(k, -math.inf), np.full(k, math.inf)
-    gap0 = mf.gap(np.zeros(mf.n))
-    link0 = mf.link(np.zeros(mf.n))
     for i in range(k):
         # (normalised: at 2048 elements HiGHS stopped on "numerical difficulties"
         # with the rows of B as they are, ~2e-3)
-        direction = prog.B[i] / max(float(np.max(np.abs(prog.B[i]))), 1e-300)
+        scale = max(float(np.max(np.abs(D[i]))), 1e-300)
+        direction = D[i] / scale
         for sign in (1.0, -1.0):
             # (HiGHS's presolve failed, "Solve error", on a P1 beam's third mode with an
             # obstacle below, where the LP is unbounded; without presolve it says so)
             for method, options in LP_ATTEMPTS:
                 with _quiet_stdout():
-                    res = so.linprog(sign * direction, A_ub=-mf.A, b_ub=gap0, A_eq=mf.C,
-                                     b_eq=-link0, bounds=(None, None), method=method,
+                    res = so.linprog(sign * direction, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq,
+                                     b_eq=b_eq, bounds=(None, None), method=method,
                                      options=options)
                 if res.status in (0, 3):
                     break
@@ -136,22 +162,19 @@ def amplitude_range(prog):
                 # 2048 elements; the primal and dual values agreed to 3e-16).
                 y = np.minimum(res.ineqlin.marginals, 0.0)
                 y_eq = res.eqlin.marginals
-                r = sign * direction + mf.A.T @ y - mf.C.T @ y_eq
+                r = sign * direction - A_ub.T @ y - A_eq.T @ y_eq
                 if float(np.max(np.abs(r))) > 1e-10:
                     log.warning("amplitude range: dual residual %.1e; no end taken",
                                 float(np.max(np.abs(r))))
                     continue
-                bound = float(gap0 @ y - link0 @ y_eq)   # <= min (sign d)'z
-                scale = float(np.max(np.abs(prog.B[i])))
+                bound = float(b_ub @ y + b_eq @ y_eq)   # <= min (sign d)'z
                 if sign > 0:
-                    lo[i] = scale * bound + prog.s_origin[i]
+                    lo[i] = scale * bound
                 else:
-                    hi[i] = -scale * bound + prog.s_origin[i]
+                    hi[i] = -scale * bound
             elif res.status != 3:   # 3: unbounded (no limit on that side)
                 log.warning("amplitude range: linprog status %d (%s)", res.status, res.message)
-    ends = np.r_[lo, hi]
-    size = 1.0 + np.max(np.abs(ends[np.isfinite(ends)]), initial=0.0)
-    return lo - RANGE_PAD * size, hi + RANGE_PAD * size
+    return lo, hi
 
 
 def contact_polish(prog, u, lam):

@@ -184,10 +184,9 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         # (s = 0), and two of three equilibria were missed; with two modes the dense
         # programs, without it, missed a stable pair in a 2 mm channel.  The range
         # is a linear program's, its ends bounds by weak duality
-        # (:func:`.fast_check.amplitude_range`; the fast program computes it on
-        # construction: with it, the same program).
-        from .fast_contact import FastContactProgram
-        ranged = prog.prog if fast else FastContactProgram(dp, modes)
+        # (:func:`.fast_check.lp_ranges`; both node programs compute it on
+        # construction).
+        ranged = prog.prog if fast else prog
         lo, hi = np.maximum(lo, ranged.smin), np.minimum(hi, ranged.smax)
     if modes.k == 2:
         from .stationary2 import find_plane
