@@ -128,6 +128,27 @@ def test_dense_amplitude_ranges_equal_the_mixed_forms(kw):
         assert np.all(np.isfinite(dense.smin)) and np.all(np.isfinite(dense.smax))
 
 
+def test_dense_amplitude_range_of_an_unbounded_side_is_found_without_solver_failures(caplog):
+    """P1 on an obstacle 8.4e-6 m below (two modes): every side is unbounded.  Written
+    with the equality rows (G Phi)'v = 0, whose round-off entries are 2e-17, HiGHS
+    failed ("Solve error") on one side by all its methods, and a warning said so."""
+    import logging
+
+    from gaocvx.nonconvex.minimum import rescale_for
+    from gaocvx.nonconvex.modes import unstable_modes
+    from gaocvx.nonconvex.node import NodeProgram
+
+    d = scene_dict("P1", q=0.0, axial=15207024486.094387, obstacle=8.429096783427796e-06,
+                   elements=10)
+    dp = DiscreteProblem(Scene.from_dict(d), check_convexity=False)
+    m = unstable_modes(dp)
+    assert m.k == 2
+    with caplog.at_level(logging.WARNING, logger="gaocvx.nonconvex.fast_check"):
+        prog = NodeProgram(rescale_for(dp, m), m)
+    assert not caplog.records
+    assert np.all(prog.smin == -math.inf) and np.all(prog.smax == math.inf)
+
+
 def test_dense_programs_certify_the_beam_pressed_into_a_channel():
     """Clarabel did not prove the boxes beyond the channel's ceiling infeasible
     ("error", "infeasible_inaccurate"); each kept its parent's bound and the search

@@ -224,12 +224,12 @@ class NodeProgram:
             return np.full(k, -math.inf), np.full(k, math.inf)
         from .fast_check import lp_ranges, padded
 
-        # z = (s, v): rows (Phi s + v) >= levels, (G Phi)'v = 0; min / max s_i.
-        R = sp.csr_matrix(self.rows)
-        A_ub = -sp.hstack([sp.csr_matrix(R @ self.modes.phi), R]).tocsr()
-        A_eq = sp.hstack([sp.csr_matrix((k, k)), sp.csr_matrix(self.GPhi.T)]).tocsr()
-        D = np.hstack([np.eye(k), np.zeros((k, self.dp.n))])
-        lo, hi = lp_ranges(D, A_ub, -self.levels, A_eq, np.zeros(k))
+        # In u = Phi s + v with (G Phi)'v = 0: s = ((G Phi)'Phi)^-1 (G Phi)'u; min / max
+        # s_i over rows u >= levels.  (Not in (s, v) with the equality rows: their
+        # round-off entries, 2e-17, made HiGHS fail, "Solve error", on a P1 beam.)
+        D = np.linalg.solve(self.GPhi.T @ self.modes.phi, self.GPhi.T)
+        n = self.dp.n
+        lo, hi = lp_ranges(D, -sp.csr_matrix(self.rows), -self.levels, np.zeros((0, n)), np.zeros(0))
         return padded(lo, hi)
 
     def _solve(self, problem):
