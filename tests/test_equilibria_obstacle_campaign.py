@@ -879,6 +879,26 @@ def test_two_modes_minimum_on_a_kink_of_f_is_stable():
     assert any(not e.stable and abs(e.energy + 1529.192275) <= 1e-5 for e in eqs)
 
 
+def test_two_modes_minimum_whose_probes_reach_past_a_saddle_is_stable():
+    """A campaign's: P3 held at a channel's ceiling (gap 0 below, 0.34 mm above)
+    under a load table, two modes (10 elements).  A strict minimum at
+    -468.448 J (independently second-order sufficient, curvature +0.109 on the
+    touching rows' null space) has a positive definite Hessian of F (3.88, 660),
+    but its probe 1e-6 S long reached past a saddle closer than that and fell:
+    it was listed unstable.  Every listed equilibrium checked."""
+    from gaocvx import Scene
+    scene = Scene.from_dict({
+        "beam": {**_BEAM, "supports": "P3"},
+        "load": {"q": [[0.0, -30993.21994801864], [0.7797555883922782, 40959.16384531206],
+                       [0.8193537353412502, -97770.07394984264], [1.0, -4878.846607077554]],
+                 "axial": 6048283960.31694},
+        "mesh": {"elements": 10}, "obstacle": {"gap": 0.0, "gap_above": 0.00033968574624870785}})
+    eqs = equilibria(scene)
+    _checked(scene, eqs)
+    found = [e for e in eqs if abs(e.energy + 468.448) <= 1e-3]
+    assert len(found) == 1 and found[0].stable
+
+
 _PRESSED_FLAT = {  # P2 at gap 0 under one point force beyond its unloaded span, one mode
     "beam": {**_BEAM, "supports": "P2"},
     "load": {"points": [[0.9062491133142933, -555221.6090161361]], "axial": 5552791059.905625},

@@ -279,37 +279,49 @@ def _at_roots(dp, grad, hessian, roots, S, known=(), strict=False) -> list:
 def _curvature(grad, H, s, h) -> float:
     """The curvature that classifies the zero ``s``: the least of the Hessian's
     eigenvalues and of the one-sided probes (:func:`_least_rise`), unless the
-    two disagree the other way round (a kink of F through ``s``), where F itself
-    decides.
+    two disagree, where F itself decides (:func:`_rises`).
 
-    For a smooth F the probes' least rise is the least eigenvalue to O(h); the
-    probes rising everywhere while the Hessian has a negative eigenvalue means
+    For a smooth F the probes' least rise is the least eigenvalue to O(h).
+    Probes rising everywhere while the Hessian has a negative eigenvalue mean
     a kink of F's curvature, across which the Hessian's columns (central
     differences along the axes, symmetrised) mix the two sides: a P3 beam in a
     channel at gap 0 with two modes (10 elements) had a strict minimum (F rising
     as +5.4 h^2 in every direction, independently second-order sufficient)
     with eigenvalues -6.1 and 838, listed unstable; its saddle lies 1.3e-6 S
-    beside it.  There the zero is a minimum if F rises in every probe direction
-    and both ways along the Hessian's falling eigenvector, at ``h`` and
-    ``h / 10``, by more than 1e-12 of |F| and with its least rise over
-    ``step^2`` at ``h / 10`` at least a quarter of that at ``h`` (a kink's
-    quadratic rise keeps it; a nearly flat saddle's, a quartic term's over
-    ``-eps x^2``, collapses); else the least eigenvalue stands.
+    beside it.  There the zero is a minimum if F rises at ``h`` and ``h / 10``.
+    The other way round, a positive definite Hessian while a probe falls, means
+    a saddle closer than ``h`` that the probe reached past: a P3 beam held at a
+    channel's ceiling under a load table (10 elements) had a strict minimum
+    (eigenvalues 3.88 and 660, F rising as at least 15.3 step^2 at h / 10 and
+    h / 100, independently second-order sufficient) whose probe at h fell by
+    1.6e-5, listed unstable.  There the zero is a minimum if F rises at
+    ``h / 10`` and ``h / 100``.
     """
     eig, vec = np.linalg.eigh(H)
     least = _least_rise(grad, s, h)
-    if not (least > 0 and eig[0] <= 0):
-        return min(float(eig[0]), least)
+    if least > 0 and not eig[0] > 0:
+        return least if _rises(grad, s, vec[:, 0], (h, 0.1 * h)) else float(eig[0])
+    if eig[0] > 0 and not least > 0:
+        return float(eig[0]) if _rises(grad, s, vec[:, 0], (0.1 * h, 0.01 * h)) else least
+    return min(float(eig[0]), least)
+
+
+def _rises(grad, s, v, steps) -> bool:
+    """Whether F rises from the zero ``s`` at both ``steps`` in 64 directions and both
+    ways along ``v`` (the Hessian's least eigenvector), by more than 1e-12 of |F|,
+    with its least rise over ``step^2`` at the second at least a quarter of that at
+    the first (a kink's quadratic rise keeps it; a nearly flat saddle's, a quartic
+    term's over ``-eps x^2``, collapses)."""
     F0 = grad(s)[0]
     dirs = [np.array([math.cos(t), math.sin(t)])
-            for t in np.linspace(0.0, 2.0 * math.pi, 64, endpoint=False)] + [vec[:, 0], -vec[:, 0]]
+            for t in np.linspace(0.0, 2.0 * math.pi, 64, endpoint=False)] + [v, -v]
     rises = []
-    for step in (h, 0.1 * h):
+    for step in steps:
         rise = min(grad(s + step * e)[0] - F0 for e in dirs)
         if not rise > 1e-12 * abs(F0):
-            return float(eig[0])
+            return False
         rises.append(rise / step**2)
-    return least if rises[1] >= 0.25 * rises[0] else float(eig[0])
+    return rises[1] >= 0.25 * rises[0]
 
 
 def _least_rise(grad, s, h, n: int = 16, fine: int = 64, kink: bool = False) -> float:
