@@ -899,6 +899,28 @@ def test_two_modes_minimum_whose_probes_reach_past_a_saddle_is_stable():
     assert len(found) == 1 and found[0].stable
 
 
+def test_equilibria_closer_than_the_merging_distance_are_searched_in_their_own_square():
+    """A campaign's: P1 on an obstacle 8.4e-6 m below, no load, two modes (10
+    elements; S = 2.72).  Near the flat beam (|s| = 2.4e-5 S) lie a saddle on the
+    line s_2 = 0, a pair of strict minima 2.25e-7 S beside it (-2.2959457758 J)
+    and another pair 1.3e-6 S from it (-2.2958260187 J; independently second-order
+    sufficient).  Within the merging distance (1e-6 S) the first pair was merged
+    into the saddle, and probes of 1e-6 S from the second fell towards the first:
+    it was listed unstable.  Searched again in a square of their own size, both
+    pairs are listed stable; every listed equilibrium checked."""
+    from gaocvx import Scene
+    scene = Scene.from_dict({
+        "beam": {**_BEAM, "supports": "P1"}, "load": {"axial": 15207024486.094387},
+        "mesh": {"elements": 10}, "obstacle": {"gap": 8.429096783427796e-06}})
+    eqs = equilibria(scene)
+    _checked(scene, eqs)
+    for energy in (-2.2959457758, -2.2958260187):
+        pair = [e for e in eqs if abs(e.energy - energy) <= 1e-9]
+        assert len(pair) == 2 and all(e.stable for e in pair)
+        assert abs(pair[0].amplitudes[1] + pair[1].amplitudes[1]) <= 1e-6 * abs(pair[0].amplitudes[1])
+    assert any(not e.stable and abs(e.energy + 2.2958894461) <= 1e-9 for e in eqs)
+
+
 _PRESSED_FLAT = {  # P2 at gap 0 under one point force beyond its unloaded span, one mode
     "beam": {**_BEAM, "supports": "P2"},
     "load": {"points": [[0.9062491133142933, -555221.6090161361]], "axial": 5552791059.905625},

@@ -76,7 +76,7 @@ import numpy as np
 from .bounds import estimate_boxes, zoom_boxes
 from .contours import curve_zeros, line_zeros
 from .descents import descents as _descents, in_square as _in_square, passes as _passes
-from .equilibrium import Equilibrium, same_point
+from .equilibrium import MERGE, Equilibrium, same_point
 from .obstacle_checks import at_global, check_contact, exact_flat
 from .stationary import ROOT_TOL
 
@@ -85,10 +85,13 @@ __all__ = ["find_plane", "GRID2"]
 log = logging.getLogger(__name__)
 
 GRID2 = 25  # odd: (0, 0) is a grid point
+# Equilibria within this fraction of the box's size S of the flat beam are searched
+# again in a square of their own size (_near_flat).
+NEAR_FLAT = 1e-3
 
 
 def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
-               starts=(), box=None, minimisers=()) -> list:
+               starts=(), box=None, minimisers=(), zoom: bool = True) -> list:
     """Every zero of ``∇F`` found in ``[-S, S]^2`` (see the module's notes).
 
     ``floor`` [in the program's energy unit]: the smallest energy scale residuals are
@@ -209,10 +212,64 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
                     least = max(least, _least_rise(grad, s, 1e-8 * S, kink=True))
                 return least > 0, least
             out = exact_flat(dp, modes, out, classify, relabel=True, S=S)
+        if zoom:
+            out = _near_flat(dp, prog, S, grid, floor, modes, out, lo, hi, minimisers)
     out.sort(key=lambda e: e.energy)
     log.info("equilibria (k = 2): %d found from %d seeds, %d solves in %.2f s", len(out),
              len(seeds), len(cache), time.perf_counter() - t0)
     return out
+
+
+def _near_flat(dp, prog, S, grid, floor, modes, out, lo, hi, minimisers) -> list:
+    """Equilibria near the flat beam searched again in a square of their own size.
+
+    Equilibria closer together than the merging distance (MERGE S) are one to the
+    search, and its probes reach past them (P1 on an obstacle 8.4e-6 m below, no
+    load, 10 elements: near the flat beam, |s| = 2.4e-5 S, a saddle, a pair of
+    minima 2.25e-7 S beside it and another pair 1.3e-6 S away).  Where equilibria
+    other than the flat beam lie within NEAR_FLAT of the searched square's size
+    (``S``, or less where the admissible amplitudes end sooner: a channel) from
+    it, the square of four times the largest such ``|s|``, ``R``, is searched with
+    ``R`` as its size, seeded with what the first search found there.  Its
+    equilibria are listed beside the first search's; where both found one (within
+    MERGE R), the second's stands unless only the first's is ``optimal``, and a
+    first one that is not ``optimal`` gives way to a second's within MERGE S (it
+    stood for several).  The flat beam stays the first search's (probes of 1e-6
+    and 1e-8 of ``R`` would reach round-off), and minima on the square's sides,
+    where the admissible amplitudes go on, are the square's, not F's.
+    """
+    size = float(np.max(np.abs(np.r_[lo, hi])))
+    near = [float(np.linalg.norm(e.amplitudes)) for e in out
+            if MERGE * S < float(np.linalg.norm(e.amplitudes)) <= NEAR_FLAT * size]
+    if not near:
+        return out
+    R = 4.0 * max(near)
+
+    def within(s):
+        return float(np.max(np.abs(s))) <= R
+
+    def on_cut_side(s):
+        s, edge = np.asarray(s, float), (1.0 - 1e-6) * R
+        return bool(np.any((s <= -edge) & (lo < -R)) or np.any((s >= edge) & (hi > R)))
+
+    inner = find_plane(dp, prog, R, grid, floor, modes,
+                       starts=[np.asarray(e.amplitudes, float) for e in out if within(e.amplitudes)],
+                       box=(np.maximum(lo, -R), np.minimum(hi, R)),
+                       minimisers=[m for m in minimisers if within(m.amplitudes)], zoom=False)
+    inner = [f for f in inner if not same_point(f.amplitudes, 0.0, S)
+             and not on_cut_side(f.amplitudes)]
+    kept = []
+    for e in out:
+        twins = [f for f in inner if same_point(e.amplitudes, f.amplitudes, R)]
+        if e.status == "optimal" and twins and all(f.status != "optimal" for f in twins):
+            inner = [f for f in inner if not any(f is t for t in twins)]
+            kept.append(e)
+        elif not twins and (e.status == "optimal" or not any(
+                same_point(e.amplitudes, f.amplitudes, S) for f in inner)):
+            kept.append(e)
+    log.info("equilibria (k = 2): near the flat beam searched again in a square of "
+             "%.3g S: %d listed, %d before", R / S, len(kept) + len(inner), len(out))
+    return kept + inner
 
 
 def _newton(grad, hessian, seeds, S) -> list:
