@@ -33,7 +33,7 @@ every zero is found, so this search is a careful sampling, not a proof:
    direction is a local minimum of the energy (stable), else unstable (a
    saddle or a maximum of F; the probes see a kink of F's curvature that the
    central differences average away; where the probes rise all round and the
-   Hessian does not, F's own values decide, :func:`_curvature`);
+   Hessian does not, F's own values decide, :func:`.probes.curvature`);
 4. with an obstacle or channel, a local minimum of ``F`` at a kink or at the
    edge of the admissible amplitudes (a beam resting on the obstacle, or
    pressed flat onto it at gap 0) is no zero of ``∇F``: every grid point whose
@@ -78,6 +78,7 @@ from .contours import curve_zeros, line_zeros
 from .descents import descents as _descents, in_square as _in_square, passes as _passes
 from .equilibrium import MERGE, Equilibrium, same_point
 from .obstacle_checks import at_global, check_contact, exact_flat
+from .probes import curvature as _curvature, least_rise as _least_rise
 from .stationary import ROOT_TOL
 
 __all__ = ["find_plane", "GRID2"]
@@ -331,104 +332,6 @@ def _at_roots(dp, grad, hessian, roots, S, known=(), strict=False) -> list:
                                [float(x) for x in r], dp.x.copy(), w, slope, res, status,
                                float(dp.P), curvature, float(dp.W)))
     return out
-
-
-def _curvature(grad, H, s, h) -> float:
-    """The curvature that classifies the zero ``s``: the least of the Hessian's
-    eigenvalues and of the one-sided probes (:func:`_least_rise`), unless the
-    two disagree, where F itself decides (:func:`_rises`).
-
-    For a smooth F the probes' least rise is the least eigenvalue to O(h).
-    Probes rising everywhere while the Hessian has a negative eigenvalue mean
-    a kink of F's curvature, across which the Hessian's columns (central
-    differences along the axes, symmetrised) mix the two sides: a P3 beam in a
-    channel at gap 0 with two modes (10 elements) had a strict minimum (F rising
-    as +5.4 h^2 in every direction, independently second-order sufficient)
-    with eigenvalues -6.1 and 838, listed unstable; its saddle lies 1.3e-6 S
-    beside it.  There the zero is a minimum if F rises at ``h`` and ``h / 10``.
-    The other way round, a positive definite Hessian while a probe falls, means
-    a saddle closer than ``h`` that the probe reached past: a P3 beam held at a
-    channel's ceiling under a load table (10 elements) had a strict minimum
-    (eigenvalues 3.88 and 660, F rising as at least 15.3 step^2 at h / 10 and
-    h / 100, independently second-order sufficient) whose probe at h fell by
-    1.6e-5, listed unstable.  There the zero is a minimum if F rises at
-    ``h / 10`` and ``h / 100``.
-    """
-    eig, vec = np.linalg.eigh(H)
-    least = _least_rise(grad, s, h)
-    if least > 0 and not eig[0] > 0:
-        return least if _rises(grad, s, vec[:, 0], (h, 0.1 * h)) else float(eig[0])
-    if eig[0] > 0 and not least > 0:
-        return float(eig[0]) if _rises(grad, s, vec[:, 0], (0.1 * h, 0.01 * h)) else least
-    return min(float(eig[0]), least)
-
-
-def _rises(grad, s, v, steps) -> bool:
-    """Whether F rises from the zero ``s`` at both ``steps`` in 64 directions and both
-    ways along ``v`` (the Hessian's least eigenvector), by more than 1e-12 of |F|,
-    with its least rise over ``step^2`` at the second at least a quarter of that at
-    the first (a kink's quadratic rise keeps it; a nearly flat saddle's, a quartic
-    term's over ``-eps x^2``, collapses)."""
-    F0 = grad(s)[0]
-    dirs = [np.array([math.cos(t), math.sin(t)])
-            for t in np.linspace(0.0, 2.0 * math.pi, 64, endpoint=False)] + [v, -v]
-    rises = []
-    for step in steps:
-        rise = min(grad(s + step * e)[0] - F0 for e in dirs)
-        if not rise > 1e-12 * abs(F0):
-            return False
-        rises.append(rise / step**2)
-    return rises[1] >= 0.25 * rises[0]
-
-
-def _least_rise(grad, s, h, n: int = 16, fine: int = 64, kink: bool = False) -> float:
-    """The least one-sided curvature ``e . (∇F(s + h e) - ∇F(s)) / h`` of F at the
-    zero ``s`` over directions ``e`` (inadmissible probes left out; inf if none
-    is admissible): a local minimum needs it positive.  ``kink``: ``s`` may lie
-    on a kink of F (the flat beam at gap 0), where the slice's ``∇F(s)`` is one
-    of many one-sided slopes and is left out: ``e . ∇F(s + h e) / h``, the
-    slope along ``e`` beside ``s`` (a P4 beam pressed flat under a small point
-    force, 8 elements: F fell like -h^2 over 40 degrees of directions, while
-    ``∇F(s + h e) - ∇F(s)`` rose in all, and w = 0 was called stable).
-
-    ``n`` directions first; where all rise, ``fine`` directions, and around each
-    of them that rises least among its neighbours the least by Brent's method
-    (a sampling: a falling cone narrower than the directions' spacing next to no
-    such local least can still be missed).
-
-    The central-difference Hessian averages the two sides of a kink of F's
-    second derivative: a flat beam on a bed at gap 0 with two modes and no load
-    has F = -c s1^2 lifting off (s1 > 0) and (K - c) s1^2 into the bed, and
-    K - 2c > 0 called it stable where lifting off lowers the energy (a
-    campaign's P4 beam on a bed of 3e12 N/m^2 at 5e9 N, 8 elements; a path
-    called w = 0 unstable at 4e9 N and stable at 5e9 N).  With one mode the
-    two sides are compared already (:func:`.stationary._classify`).  Under a
-    load that presses a beam flat at gap 0, F rises in most directions (the
-    load's work) and falls only in a narrow cone where the beam lifts off its
-    unloaded span: 10 degrees wide for a P2 beam under two point forces, between
-    two of 16 directions, and w = 0 was called stable (a campaign's, 8 elements).
-    """
-    import scipy.optimize as so
-
-    g0 = np.zeros(2) if kink else np.asarray(grad(s)[1], float)
-
-    def rise(t):
-        e = np.array([math.cos(t), math.sin(t)])
-        F, d, _, _ = grad(s + h * e)
-        return float(e @ (np.asarray(d, float) - g0)) / h if math.isfinite(F) else math.inf
-
-    least = min(rise(t) for t in np.linspace(0.0, 2.0 * math.pi, n, endpoint=False))
-    if not least > 0:
-        return least
-    ts = np.linspace(0.0, 2.0 * math.pi, fine, endpoint=False)
-    vals = np.array([rise(t) for t in ts])
-    step = ts[1] - ts[0]
-    for i in range(fine):
-        if math.isfinite(vals[i]) and vals[i] <= vals[i - 1] and vals[i] <= vals[(i + 1) % fine]:
-            res = so.minimize_scalar(rise, bounds=(ts[i] - step, ts[i] + step), method="bounded",
-                                     options=dict(xatol=1e-3 * step, maxiter=40))
-            least = min(least, float(res.fun), float(vals[i]))
-    return min(least, float(np.min(vals)))
 
 
 def _images(dp, modes, grad, out, S) -> list:
