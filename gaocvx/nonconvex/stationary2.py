@@ -232,10 +232,9 @@ def _near_flat(dp, prog, S, grid, floor, modes, out, lo, hi, minimisers) -> list
     (``S``, or less where the admissible amplitudes end sooner: a channel) from
     it, the square of four times the largest such ``|s|``, ``R``, is searched with
     ``R`` as its size, seeded with what the first search found there.  Its
-    ``optimal`` equilibria are listed beside the first search's; where both found one (within
-    MERGE R), the second's stands unless only the first's is ``optimal``, and a
-    first one that is not ``optimal`` gives way to a second's within MERGE S (it
-    stood for several).  The flat beam stays the first search's (probes of 1e-6
+    ``optimal`` equilibria are listed beside the first search's; where both found
+    one (within MERGE R), the second's stands, and a first one that is not
+    ``optimal`` gives way to a second's within MERGE S (it stood for several).  The flat beam stays the first search's (probes of 1e-6
     and 1e-8 of ``R`` would reach round-off), and minima on the square's sides,
     where the admissible amplitudes go on, are the square's, not F's.
     """
@@ -261,17 +260,12 @@ def _near_flat(dp, prog, S, grid, floor, modes, out, lo, hi, minimisers) -> list
     # ones were a saddle repeated up to eight times 4e-6 to 9e-5 of the deflection
     # apart, or points beside a saddle that are no equilibrium -- a helper's check
     # of 120 campaign scenes)
-    inner = [f for f in inner if f.status == "optimal" and not same_point(f.amplitudes, 0.0, S)
-             and not on_cut_side(f.amplitudes)]
-    kept = []
-    for e in out:
-        twins = [f for f in inner if same_point(e.amplitudes, f.amplitudes, R)]
-        if e.status == "optimal" and twins and all(f.status != "optimal" for f in twins):
-            inner = [f for f in inner if not any(f is t for t in twins)]
-            kept.append(e)
-        elif not twins and (e.status == "optimal" or not any(
-                same_point(e.amplitudes, f.amplitudes, S) for f in inner)):
-            kept.append(e)
+    inner = [f for f in inner if f.status == "optimal"
+             and not same_point(f.amplitudes, 0.0, S) and not on_cut_side(f.amplitudes)]
+    # (a first entry goes where the second search found it again, within MERGE R,
+    # and, not `optimal`, where a second one lies within MERGE S: it stood for several)
+    kept = [e for e in out if not any(
+        same_point(e.amplitudes, f.amplitudes, R if e.status == "optimal" else S) for f in inner)]
     log.info("equilibria (k = 2): near the flat beam searched again in a square of "
              "%.3g S: %d listed, %d before", R / S, len(kept) + len(inner), len(out))
     return kept + inner
