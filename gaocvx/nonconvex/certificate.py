@@ -44,9 +44,10 @@ import numpy as np
 import scipy.linalg as la
 import scipy.optimize as so
 
+from ..certificate import certify
 from ..tolerances import TOUCH_TOL, complementarity
 
-__all__ = ["psi_certificate", "contact_multipliers", "certify_contact"]
+__all__ = ["psi_certificate", "contact_multipliers", "certify_contact", "certify_answer"]
 
 
 def psi_certificate(dp, modes, u, lam, rows, levels=None, floor: float = 0.0) -> dict:
@@ -185,6 +186,25 @@ def certify_contact(dp, modes, u, lam, rows, levels, floor: float = 0.0) -> tupl
             return res, cand
         tried.append((res, cand))
     return tried[-1] if tried else ({"stationarity": math.inf}, lam)
+
+
+def certify_answer(dp, prog, mf, z, lam) -> tuple:
+    """Residuals and multipliers of the global method's answer ``z`` (mixed variables of ``mf``).
+
+    Without an obstacle, :func:`gaocvx.certificate.certify`.  An obstacle may
+    hold the beam against its unstable modes, where the energy's Hessian is
+    indefinite: measured in the convex part's metric.  The multipliers are
+    recomputed on the touching rows too (an interior-point solver leaves its
+    tolerance on rows far from the obstacle): either set that meets every
+    condition certifies the answer.  ``prog`` is the node program (the fast
+    path's has a ``certify`` of its own, the same measures in the mixed form).
+    """
+    if dp.contact != "obstacle":
+        return certify(mf, z, lam), lam
+    zfloor = mf.zero_floor if mf.has_load else 0.0
+    if hasattr(prog, "certify"):
+        return prog.certify(z, mf.no_contact_forces() if lam is None else lam, zfloor)
+    return certify_contact(dp, prog.modes, mf.to_hermite(z), lam, prog.rows, prog.levels, zfloor)
 
 
 def contact_polish(dp, u, lam, rows, levels, max_iter: int = 12):
