@@ -51,7 +51,12 @@ every zero is found, so this search is a careful sampling, not a proof:
    certified minimiser is listed itself where no `optimal` stable entry as low is
    that close (:func:`.obstacle_checks.at_global`);
    and the flat beam ``w = 0`` is checked as an equilibrium of its own
-   (:func:`.obstacle_checks.exact_flat`).
+   (:func:`.obstacle_checks.exact_flat`);
+6. with an obstacle, second searches on finer grids (:mod:`.zooms`): near the
+   flat beam, in a square of the size of the equilibria found there, and over
+   the box of each of the three lowest clusters of equilibria closer than 1.5
+   grid steps with two or more minima among them (a row of minima along a
+   surface); their ``optimal`` equilibria are added.
 
 Examples
 --------
@@ -70,13 +75,15 @@ from __future__ import annotations
 import logging
 import math
 import time
+from functools import partial
 
 import numpy as np
 
+from . import zooms
 from .bounds import estimate_boxes, zoom_boxes
 from .contours import curve_zeros, line_zeros
 from .descents import descents as _descents, in_square as _in_square, passes as _passes
-from .equilibrium import MERGE, Equilibrium, same_point
+from .equilibrium import Equilibrium, same_point
 from .obstacle_checks import at_global, check_contact, exact_flat
 from .probes import curvature as _curvature, least_rise as _least_rise
 from .stationary import ROOT_TOL
@@ -86,9 +93,6 @@ __all__ = ["find_plane", "GRID2"]
 log = logging.getLogger(__name__)
 
 GRID2 = 25  # odd: (0, 0) is a grid point
-# Equilibria within this fraction of the box's size S of the flat beam are searched
-# again in a square of their own size (_near_flat).
-NEAR_FLAT = 1e-3
 
 
 def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
@@ -214,61 +218,18 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
                 return least > 0, least
             out = exact_flat(dp, modes, out, classify, relabel=True, S=S)
         if zoom:
-            out = _near_flat(dp, prog, S, grid, floor, modes, out, lo, hi, minimisers)
+            # (second searches on finer grids, :mod:`.zooms`; the clusters' without
+            # the modes' boxes, images and flat beam, which the first search has)
+            def search(size, box, starts, mins, modes=modes, grid=grid):
+                return find_plane(dp, prog, size, grid, floor, modes, starts=starts, box=box,
+                                  minimisers=mins, zoom=False)
+            out = zooms.near_flat(search, S, out, lo, hi, minimisers)
+            step = (hi - lo) / (grid - 1)
+            out = zooms.clusters(partial(search, modes=None, grid=13), S, out, lo, hi, step, minimisers)
     out.sort(key=lambda e: e.energy)
     log.info("equilibria (k = 2): %d found from %d seeds, %d solves in %.2f s", len(out),
              len(seeds), len(cache), time.perf_counter() - t0)
     return out
-
-
-def _near_flat(dp, prog, S, grid, floor, modes, out, lo, hi, minimisers) -> list:
-    """Equilibria near the flat beam searched again in a square of their own size.
-
-    Equilibria closer together than the merging distance (MERGE S) are one to the
-    search, and its probes reach past them (P1 on an obstacle 8.4e-6 m below, no
-    load, 10 elements: near the flat beam, |s| = 2.4e-5 S, a saddle, a pair of
-    minima 2.25e-7 S beside it and another pair 1.3e-6 S away).  Where equilibria
-    other than the flat beam lie within NEAR_FLAT of the searched square's size
-    (``S``, or less where the admissible amplitudes end sooner: a channel) from
-    it, the square of four times the largest such ``|s|``, ``R``, is searched with
-    ``R`` as its size, seeded with what the first search found there.  Its
-    ``optimal`` equilibria are listed beside the first search's; where both found
-    one (within MERGE R), the second's stands, and a first one that is not
-    ``optimal`` gives way to a second's within MERGE S (it stood for several).  The flat beam stays the first search's (probes of 1e-6
-    and 1e-8 of ``R`` would reach round-off), and minima on the square's sides,
-    where the admissible amplitudes go on, are the square's, not F's.
-    """
-    size = float(np.max(np.abs(np.r_[lo, hi])))
-    near = [float(np.linalg.norm(e.amplitudes)) for e in out
-            if MERGE * S < float(np.linalg.norm(e.amplitudes)) <= NEAR_FLAT * size]
-    if not near:
-        return out
-    R = 4.0 * max(near)
-
-    def within(s):
-        return float(np.max(np.abs(s))) <= R
-
-    def on_cut_side(s):
-        s, edge = np.asarray(s, float), (1.0 - 1e-6) * R
-        return bool(np.any((s <= -edge) & (lo < -R)) or np.any((s >= edge) & (hi > R)))
-
-    inner = find_plane(dp, prog, R, grid, floor, modes,
-                       starts=[np.asarray(e.amplitudes, float) for e in out if within(e.amplitudes)],
-                       box=(np.maximum(lo, -R), np.minimum(hi, R)),
-                       minimisers=[m for m in minimisers if within(m.amplitudes)], zoom=False)
-    # (and only its `optimal` equilibria: on beams pressed at gap 0 its `inaccurate`
-    # ones were a saddle repeated up to eight times 4e-6 to 9e-5 of the deflection
-    # apart, or points beside a saddle that are no equilibrium -- a helper's check
-    # of 120 campaign scenes)
-    inner = [f for f in inner if f.status == "optimal"
-             and not same_point(f.amplitudes, 0.0, S) and not on_cut_side(f.amplitudes)]
-    # (a first entry goes where the second search found it again, within MERGE R,
-    # and, not `optimal`, where a second one lies within MERGE S: it stood for several)
-    kept = [e for e in out if not any(
-        same_point(e.amplitudes, f.amplitudes, R if e.status == "optimal" else S) for f in inner)]
-    log.info("equilibria (k = 2): near the flat beam searched again in a square of "
-             "%.3g S: %d listed, %d before", R / S, len(kept) + len(inner), len(out))
-    return kept + inner
 
 
 def _newton(grad, hessian, seeds, S) -> list:
