@@ -114,3 +114,36 @@ def test_pressed_flat_at_gap_0_is_certified_at_1024_elements():
 def test_pressed_flat_at_gap_0_is_certified_at_2048_elements(q):
     """Was `inaccurate` at q = -1e8 N/m (complementarity); 19 s on a loaded machine."""
     _pressed_flat(2048, q=q)
+
+
+def test_one_mode_slices_are_admissible_and_of_the_dc_form_across_the_range():
+    """With one mode the energy is Psi(u) - c s^2 with Psi convex (nonconvex.md), so
+    F(s) + c s^2 is convex on the admissible amplitudes, an interval (the admissible
+    beams are convex): every slice strictly inside the linear program's range is
+    finite, and F' + 2 c s never falls.  P1 in a channel 4 mm high under a load
+    table (12 elements): a slice solved afresh 0.005 of the range from its lower end
+    stalled at a violation of 1.18e-6 of its size (forces of 7.7e5 in the
+    program's units) and was taken as inadmissible, F = inf."""
+    from gaocvx.nonconvex.fast_contact import FastContactProgram
+    from gaocvx.nonconvex.minimum import rescale_for, scene_energy
+    from gaocvx.nonconvex.modes import unstable_modes
+    from gaocvx.nonconvex.slices import ContactSlices
+
+    data = scene_dict("P1", q=0.0, axial=9.0e9, obstacle=2e-3, elements=12)
+    data["load"]["q"] = [[0.0, -3e6], [0.5, 2e6], [1.0, -1e6]]
+    data["obstacle"]["gap_above"] = 4e-3
+    dp = DiscreteProblem(Scene.from_dict(data), check_convexity=False)
+    m = unstable_modes(dp)
+    assert m.k == 1
+    dp = rescale_for(dp, m)
+    slices = ContactSlices(FastContactProgram(dp, m), scene_energy(dp, m))   # as equilibria's
+    lo, hi = float(slices.smin[0]), float(slices.smax[0])
+    s = np.linspace(lo, hi, 400)[1:-1]
+    slopes = []
+    for x in s:
+        with slices.cold():
+            F, dF, _, ok = slices.reduced([x])
+        assert np.isfinite(F) and ok, x
+        slopes.append(float(dF[0]) + 2.0 * float(m.c[0]) * x)
+    rise = np.diff(slopes)
+    assert rise.min() >= -1e-9 * np.max(np.abs(slopes)), (rise.min(), s[np.argmin(rise)])

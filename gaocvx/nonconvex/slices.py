@@ -13,6 +13,8 @@ import math
 
 import numpy as np
 
+from .fast_check import RANGE_PAD
+
 __all__ = ["ContactSlices"]
 
 
@@ -105,12 +107,23 @@ class ContactSlices:
             starts.append((near[1], near[2], near[3]))
         starts.append((-mf.origin, mf.no_contact_forces(), self.rho_start))
         best = None
+        # With one mode every amplitude between the range's ends is admissible (the
+        # admissible beams are convex, the ends the linear program's): a slice there
+        # stalled at violations above 1e-6 of its size is the multipliers' slowness,
+        # not an empty slice -- the penalty is raised there too (P1 in a channel 4 mm
+        # high under a load table, 12 elements: a cold slice 0.005 of the range from
+        # its end stalled at 1.18e-6 with forces of 7.7e5, and F was taken infinite).
+        # (beyond ten times the ends' padding, which lies outside them)
+        ends = np.r_[self.smin, self.smax]
+        margin = 10.0 * RANGE_PAD * (1.0 + float(np.max(np.abs(ends[np.isfinite(ends)]),
+                                                        initial=0.0)))
+        inside = self.k == 1 and bool(np.all((s0 > self.smin + margin) & (s0 < self.smax - margin)))
 
         def rank(out):
             return (not (out[2] and out[4] <= FEASIBLE), out[4])
         with one_blas_thread():   # O(N) work: BLAS threads cost more than they do
             for z, lam, rho in starts:
-                out = self._multipliers(target, z.copy(), lam.copy(), rho)
+                out = self._multipliers(target, z.copy(), lam.copy(), rho, admissible=inside)
                 # a converged feasible answer first, then the least violation (a
                 # warm start that did not converge once left F' = +24 for -36 in
                 # a Brent bracket: a false zero)
@@ -145,7 +158,7 @@ class ContactSlices:
         finally:
             self._cache[:] = saved
 
-    def _multipliers(self, target, z, lam, rho, updates=60, stall=5):
+    def _multipliers(self, target, z, lam, rho, updates=60, stall=5, admissible=False):
         """The method of multipliers on the slice; (z, nu, converged, lam, violation, rho) or None.
 
         When the violation stops halving at the program's largest penalty, the
@@ -156,7 +169,8 @@ class ContactSlices:
         4e-12 at 1e10, 6e-17 at 1e13; the slope F' was 2e-6 off at the first,
         within 1e-8 of the dense program's at the second).  Stalled at the
         raised penalty, or with a violation far above round-off (1e-6 of the
-        answer's size), the slice is taken as inadmissible.
+        answer's size), the slice is taken as inadmissible, unless it is known
+        to be ``admissible`` (then the penalty is raised there too).
         """
         from .fast_contact import FEASIBLE
 
@@ -183,7 +197,7 @@ class ContactSlices:
                 break   # (unconverged: more updates would not change the iterate)
             if len(history) > stall and history[-1] > 0.5 * history[-1 - stall]:
                 # (a violation far above round-off is an inadmissible slice: no raise)
-                if rho >= 1e3 * self.rho_max or violation > 1e-6:
+                if rho >= 1e3 * self.rho_max or (violation > 1e-6 and not admissible):
                     break
                 rho, history = 1e3 * rho, []
         return out
