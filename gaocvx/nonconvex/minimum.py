@@ -19,7 +19,10 @@ Steps (nonconvex.md):
    scene's own energy, :func:`scene_energy`);
 7. polishing (:mod:`.polish`): the reduced function ``F(s)`` minimised from the best point
    (L-BFGS-B with its envelope gradient), then, without an obstacle, Newton on
-   the full energy; the energy only goes down, so the certificate stands;
+   the full energy; the energy only goes down (with an obstacle, up to the
+   polish's slack), so the certificate stands; where the polished point fails
+   its certificate and the search's best passes, the best stays
+   (:func:`.polish.search_best`);
 8. other minimisers: every other group of leaves whose lower bound lies
    within the gap of the best is searched the same way; one within the
    tolerance of the best energy makes the minimiser not unique;
@@ -55,10 +58,9 @@ from .alternatives import other_minimisers
 from .basin import BasinProver
 from .bnb import branch_and_bound
 from .bounds import amplitude_box, check_bounded, load_constant, mode_amplitudes
-from .certificate import certify_answer
 from .modes import unstable_modes
 from .node import NodeProgram
-from .polish import feasible_energy, polish, to_mixed
+from .polish import answer_certificate, feasible_energy, polish, search_best, to_mixed
 
 __all__ = ["solve_global", "solve_certified", "GAP_TOL", "GAP_TARGET", "MAX_ELEMENTS",
            "MAX_MODES", "to_mixed", "rescale_for"]
@@ -295,12 +297,6 @@ def _basins(dp, prog, lo, hi):
     return find
 
 
-def _certificate(dp, prog, mf, u, lam):
-    """Mixed variables, residuals and multipliers of the answer ``u`` (free DOFs)."""
-    z = mf.on_manifold(to_mixed(mf, u))
-    return (z,) + certify_answer(dp, prog, mf, z, lam)
-
-
 def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     k = modes.k
     if fast and dp.contact == "obstacle":
@@ -346,6 +342,10 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     if out.s is None:
         out.s = start[2]
     best_s, best_u, lam = polish(dp, prog, out.s, out.u, out.lam, lo, hi)
+    mf = MixedForm.on_obstacle(dp) if dp.contact == "obstacle" else MixedForm(dp)
+    kept = search_best(dp, prog, mf, out, best_u, lam, 0.5 * GAP_TOL * scale)
+    if kept:
+        best_s, best_u, lam = out.s, out.u, out.lam
     best_e = dp.energy(best_u)
     tol = max(out.gap, GAP_TARGET * scale)
 
@@ -353,20 +353,7 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     (best_e, best_u, best_s, lam), alternatives = other_minimisers(
         dp, prog, out, (best_e, best_u, best_s, lam), lo, hi, tol)
 
-    mf = MixedForm.on_obstacle(dp) if dp.contact == "obstacle" else MixedForm(dp)
-    z, residual, lam = _certificate(dp, prog, mf, best_u, lam)
-    if not passes(residual) and out.u is not None and best_u is not out.u \
-            and math.isfinite(feasible_energy(dp, prog)(out.u)):
-        # The polish may take a point up to its slack above the search's best (for
-        # answers inside the obstacle by a solver's tolerance) that is no minimiser:
-        # the best itself is the answer where it passes (a P3 beam pressed flat at
-        # gap 0 by two forces of 1.7e8 N: w = 0 passed, the polished point, 3e-11 of
-        # the energy unit higher with no contact force, did not).
-        z0, residual0, lam0 = _certificate(dp, prog, mf, out.u, out.lam)
-        if passes(residual0):
-            log.info("global: the polished point fails its certificate; the search's best "
-                     "passes")
-            z, residual, lam, best_s = z0, residual0, lam0, out.s
+    z, residual, lam = answer_certificate(dp, prog, mf, best_u, lam)
     parts = mf.energy_parts(z)
     scale = max(sum(abs(v) for v in parts.values()), floor, 1e-300)
     upper = sum(parts.values())
@@ -386,6 +373,8 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
         notes.append(f"the buckling modes failed their checks ({modes.checks})")
     if not passes(residual):
         notes.append("the minimiser's own certificate failed")
+    if kept:
+        notes.append("the search's best point returned (the polished one failed its certificate)")
     raw = answer(mf, z, lam, residual, "global: " + "; ".join(notes), out.nodes,
                  "dual-bound" if out.certificate == "dual bound" else "clarabel-bnb", t0)
     if not ok:

@@ -113,7 +113,10 @@ class ContactSlices:
         # not an empty slice -- the penalty is raised there too (P1 in a channel 4 mm
         # high under a load table, 12 elements: a cold slice 0.005 of the range from
         # its end stalled at 1.18e-6 with forces of 7.7e5, and F was taken infinite).
-        # (beyond ten times the ends' padding, which lies outside them)
+        # (beyond ten times the ends' padding, which lies outside them; an end the
+        # linear program failed on is infinite, and a slice beyond the true end then
+        # costs the raise but stays empty: its violation cannot fall below its
+        # distance from the admissible beams)
         ends = np.r_[self.smin, self.smax]
         margin = 10.0 * RANGE_PAD * (1.0 + float(np.max(np.abs(ends[np.isfinite(ends)]),
                                                         initial=0.0)))

@@ -52,11 +52,11 @@ every zero is found, so this search is a careful sampling, not a proof:
    that close (:func:`.obstacle_checks.at_global`);
    and the flat beam ``w = 0`` is checked as an equilibrium of its own
    (:func:`.obstacle_checks.exact_flat`);
-6. with an obstacle, second searches on finer grids (:mod:`.zooms`): near the
-   flat beam, in a square of the size of the equilibria found there, and over
-   the box of each of the three lowest clusters of equilibria closer than 1.5
-   grid steps with two or more minima among them (a row of minima along a
-   surface); their ``optimal`` equilibria are added.
+6. with an obstacle, second searches on finer grids (:mod:`.zooms`): before
+   step 5, over the box of each of the three lowest clusters of equilibria
+   closer than 1.5 grid steps with two or more minima among them (a row of
+   minima along a surface); after it, near the flat beam, in a square of the
+   size of the equilibria found there; their ``optimal`` equilibria are added.
 
 Examples
 --------
@@ -96,7 +96,8 @@ GRID2 = 25  # odd: (0, 0) is a grid point
 
 
 def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
-               starts=(), box=None, minimisers=(), zoom: bool = True) -> list:
+               starts=(), box=None, minimisers=(), zoom: bool = True,
+               flat: bool = True) -> list:
     """Every zero of ``∇F`` found in ``[-S, S]^2`` (see the module's notes).
 
     ``floor`` [in the program's energy unit]: the smallest energy scale residuals are
@@ -111,7 +112,9 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
     global minimiser, as an equilibrium) are listed stable
     (:func:`.obstacle_checks.at_global`).  With an obstacle the zeros on the
     zero curves of one component of ``∇F`` are added on every grid
-    (:func:`.contours.curve_zeros`).
+    (:func:`.contours.curve_zeros`).  ``zoom``: the second searches of
+    :mod:`.zooms`; ``flat``: ``s = 0`` among the seeds and tried as an edge
+    minimum (False in a cluster's box).
     """
     t0 = time.perf_counter()
     cache = {}
@@ -154,7 +157,7 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
     seeds = [np.asarray(x, float) for x in starts]
     for axes in grids:
         seeds += _grid_seeds(grad, axes)
-    if math.isfinite(grad(np.zeros(2))[0]):
+    if flat and math.isfinite(grad(np.zeros(2))[0]):
         seeds.insert(0, np.zeros(2))   # the unloaded beam's trivial equilibrium, if any
     ends = _newton(grad, hessian, seeds, S)
     # the zeros on lines of symmetry s_j = 0, where the sign of ∂F/∂s_j is round-off,
@@ -196,7 +199,15 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
         # The flat beam at gap 0 may be a minimum whose basin is far below the
         # grid's step (F rises over 1e-9 S, then falls: a P4 beam under a load
         # table, 8 elements): tried with a simplex of that size.
-        out += _edge_minima(dp, grad, None, S, found(), floor, [np.zeros(2)], 1e-8)
+        if flat:
+            out += _edge_minima(dp, grad, None, S, found(), floor, [np.zeros(2)], 1e-8)
+        if zoom:
+            # rows of minima closer than the grid's step, searched again on a finer
+            # grid over their box (:mod:`.zooms`; without the modes' boxes, images
+            # and flat beam: the checks below, and the images, take its finds too)
+            out = zooms.clusters(partial(find_plane, dp, prog, grid=zooms.CLUSTER_GRID,
+                                         floor=floor, zoom=False, flat=False),
+                                 S, out, lo, hi, (hi - lo) / (grid - 1), minimisers)
         # A symmetric scene's equilibria come in mirror pairs: an image not found
         # seeds both searches again (P1 on an obstacle 1 cm below, k = 2: a beam
         # resting on it just off the middle was found, its image was not)
@@ -218,14 +229,10 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
                 return least > 0, least
             out = exact_flat(dp, modes, out, classify, relabel=True, S=S)
         if zoom:
-            # (second searches on finer grids, :mod:`.zooms`; the clusters' without
-            # the modes' boxes, images and flat beam, which the first search has)
-            def search(size, box, starts, mins, modes=modes, grid=grid):
-                return find_plane(dp, prog, size, grid, floor, modes, starts=starts, box=box,
-                                  minimisers=mins, zoom=False)
-            out = zooms.near_flat(search, S, out, lo, hi, minimisers)
-            step = (hi - lo) / (grid - 1)
-            out = zooms.clusters(partial(search, modes=None, grid=13), S, out, lo, hi, step, minimisers)
+            # near the flat beam, a square of the equilibria's own size (:mod:`.zooms`)
+            out = zooms.near_flat(partial(find_plane, dp, prog, grid=grid, floor=floor,
+                                          modes=modes, zoom=False),
+                                  S, out, lo, hi, minimisers)
     out.sort(key=lambda e: e.energy)
     log.info("equilibria (k = 2): %d found from %d seeds, %d solves in %.2f s", len(out),
              len(seeds), len(cache), time.perf_counter() - t0)

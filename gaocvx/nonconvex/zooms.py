@@ -10,7 +10,7 @@ Two places need a finer one, and each gets a second search of its own:
   valley along a surface holds a row of minima, one for each node that touches
   it, and saddles between them, closer together than the grid's step.
 
-Both take the search as an argument (``search(S, box, starts, minimisers)``,
+Both take the search as an argument (``search(S, box=, starts=, minimisers=)``,
 :func:`.stationary2.find_plane` without zooms of its own) and return the
 merged list.
 """
@@ -23,7 +23,8 @@ import numpy as np
 
 from .equilibrium import MERGE, same_point
 
-__all__ = ["near_flat", "clusters", "NEAR_FLAT", "CLUSTER_STEPS", "MAX_CLUSTERS"]
+__all__ = ["near_flat", "clusters", "NEAR_FLAT", "CLUSTER_STEPS", "CLUSTER_GRID",
+           "MAX_CLUSTERS"]
 
 log = logging.getLogger(__name__)
 
@@ -33,8 +34,12 @@ NEAR_FLAT = 1e-3
 # Equilibria closer than this many grid steps (in each amplitude) are one cluster,
 # and its box reaches one step beyond its outermost members.
 CLUSTER_STEPS = 1.5
-# The clusters searched again at most, the lowest first (each costs a search of
-# about the first one's grid).
+# A cluster's box is searched on a grid of CLUSTER_GRID x CLUSTER_GRID points (its
+# box spans three or more steps of the first grid: a quarter step or finer).
+CLUSTER_GRID = 13
+# The clusters searched again at most, the lowest first (each cost 0.4 to 1 times
+# the first search in the scenes measured: its zero curves, descents and edge
+# minima more than its grid).
 MAX_CLUSTERS = 3
 
 
@@ -70,9 +75,9 @@ def near_flat(search, S, out, lo, hi, minimisers) -> list:
         s, edge = np.asarray(s, float), (1.0 - 1e-6) * R
         return bool(np.any((s <= -edge) & (lo < -R)) or np.any((s >= edge) & (hi > R)))
 
-    inner = search(R, (np.maximum(lo, -R), np.minimum(hi, R)),
-                   [np.asarray(e.amplitudes, float) for e in out if within(e.amplitudes)],
-                   [m for m in minimisers if within(m.amplitudes)])
+    inner = search(R, box=(np.maximum(lo, -R), np.minimum(hi, R)),
+                   starts=[np.asarray(e.amplitudes, float) for e in out if within(e.amplitudes)],
+                   minimisers=[m for m in minimisers if within(m.amplitudes)])
     # (and only its `optimal` equilibria: on beams pressed at gap 0 its `inaccurate`
     # ones were a saddle repeated up to eight times 4e-6 to 9e-5 of the deflection
     # apart, or points beside a saddle that are no equilibrium -- a helper's check
@@ -89,20 +94,43 @@ def near_flat(search, S, out, lo, hi, minimisers) -> list:
 
 
 def clusters(search, S, out, lo, hi, step, minimisers) -> list:
-    """Clusters of equilibria searched again on a grid over their own box.
+    """Clusters of equilibria searched again on a finer grid over their own box.
 
-    Equilibria (other than the flat beam) closer than CLUSTER_STEPS grid steps
-    ``step`` (one per amplitude) in both amplitudes are linked; every group
-    with two or more stable ones (a row of minima) spans a box that reaches one step beyond its
-    outermost members, within the admissible ``[lo, hi]``.  The boxes of the
-    MAX_CLUSTERS lowest groups are searched with the first search's grid,
-    seeded with the group (the square's size stays ``S``: the merging distance
-    and the probes are the first search's).  Their ``optimal`` equilibria that
-    the first search did not find (within MERGE S) are added.  (A campaign's P3
-    beam in a channel 2.5 mm high without load, 16 elements: a row of three
-    minima and two saddles along the ceiling within one grid step, and a fourth
-    minimum 0.6 steps beside them, 0.08 J lower, missed; so was one beside
-    three minima of a P3 beam under a load table.)
+    Parameters
+    ----------
+    search : callable
+        ``search(S, box=(a, b), starts=, minimisers=)``: the search of
+        :func:`.stationary2.find_plane` on a grid of CLUSTER_GRID points over
+        the box, without zooms, modes' boxes, images or the flat beam.
+    S : float
+        The searched square's size (its merging distance and probes stay).
+    out : list of Equilibrium
+        The first search's equilibria.
+    lo, hi : ndarray
+        The admissible amplitudes' box.
+    step : ndarray
+        The first grid's step in each amplitude.
+    minimisers : list of Equilibrium
+        The certified global minimisers.
+
+    Returns
+    -------
+    list of Equilibrium
+        ``out`` with the clusters' ``optimal`` equilibria added.
+
+    Notes
+    -----
+    Equilibria (other than the flat beam) closer than CLUSTER_STEPS steps in
+    both amplitudes are linked; every group with two or more stable ones (a row
+    of minima) spans a box reaching one step beyond its outermost members,
+    within ``[lo, hi]``.  The boxes of the MAX_CLUSTERS lowest groups are
+    searched, seeded with the group.  Their ``optimal`` equilibria within the
+    box (and a step around it) that the first search did not find (within
+    MERGE S) are added; one found there before but not ``optimal`` gives way.
+    (A campaign's P3 beam in a channel 2.5 mm high without load, 16 elements: a
+    row of three minima and two saddles along the ceiling within one grid step,
+    and a fourth minimum 0.6 steps beside them, 0.08 J lower, missed; so was one
+    beside three minima of a P3 beam under a load table.)
     """
     step = np.asarray(step, float)
     pts = [np.asarray(e.amplitudes, float) for e in out]
@@ -123,20 +151,24 @@ def clusters(search, S, out, lo, hi, step, minimisers) -> list:
         members.setdefault(root(i), []).append(i)
     groups = sorted((g for g in members.values() if sum(out[i].stable for i in g) >= 2),
                     key=lambda g: min(out[i].energy for i in g))[:MAX_CLUSTERS]
-    added = []
     for g in groups:
         s = np.array([pts[i] for i in g])
         a = np.maximum(lo, s.min(axis=0) - step)
         b = np.minimum(hi, s.max(axis=0) + step)
 
-        def inside(p, a=a, b=b):
-            return bool(np.all(np.asarray(p) >= a) and np.all(np.asarray(p) <= b))
+        def near(p, a=a, b=b):
+            p = np.asarray(p, float)
+            return bool(np.all(p >= a - step) and np.all(p <= b + step))
 
-        found = search(S, (a, b), list(s), [m for m in minimisers if inside(m.amplitudes)])
-        known = [e.amplitudes for e in out + added]
-        new = [f for f in found if f.status == "optimal"
-               and not any(same_point(f.amplitudes, k, S) for k in known)]
+        found = search(S, box=(a, b), starts=list(s),
+                       minimisers=[m for m in minimisers if near(m.amplitudes)])
+        new = [f for f in found if f.status == "optimal" and near(f.amplitudes)
+               and not same_point(f.amplitudes, 0.0, S)
+               and not any(same_point(f.amplitudes, e.amplitudes, S)
+                           for e in out if e.status == "optimal")]
+        before = len(out)
+        out = [e for e in out if not any(same_point(e.amplitudes, f.amplitudes, S)
+                                          for f in new)] + new
         log.info("equilibria (k = 2): a cluster of %d searched again on [%s, %s]: %d more",
-                 len(g), np.round(a, 4), np.round(b, 4), len(new))
-        added += new
-    return out + added
+                 len(g), np.round(a, 4), np.round(b, 4), len(out) - before)
+    return out
