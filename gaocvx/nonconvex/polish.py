@@ -242,12 +242,13 @@ def search_best(dp, prog, mf, out, polished, lam, slack) -> bool:
 
     ``polished`` are free DOFs with multipliers ``lam``; ``out`` the branch and
     bound's outcome; ``slack`` the energy (in ``dp``'s unit) by which the best may
-    lie above the polished point.  The polish may take a point up to its slack above the best (for answers inside
-    the obstacle by a solver's tolerance) that is no minimiser: the best is kept
-    where the polished point fails its certificate, the best passes, and its
-    energy is at most ``slack`` above the polished one's (a P3 beam pressed flat at
-    gap 0 by two forces of 1.7e8 N: w = 0 passed, the polished point, 2.9e-4 J
-    higher with no contact force, did not).
+    lie above the polished point.  The polish may take a point up to its own
+    slack (:data:`SLACK`) above the best, for answers inside the obstacle by a
+    solver's tolerance, that is no minimiser: the best is kept where the polished
+    point fails its certificate, the best passes, and its energy is at most
+    ``slack`` above the polished one's (a P3 beam pressed flat at gap 0 by two
+    forces of 1.7e8 N: w = 0 passed, the polished point, 2.9e-4 J higher with no
+    contact force, did not).
     """
     if out.u is None or polished is out.u:
         return False
