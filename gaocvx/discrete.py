@@ -215,10 +215,16 @@ class DiscreteProblem(HermiteEnergy):
             if w_lin == 0:  # no free deflection (one element, both ends pinned): slopes * L
                 w_lin = np.max(np.abs(u_lin), initial=0.0)
         self.W_linear = float(w_lin) if W_fixed is None else float(W_fixed)
+        # A bonded foundation with a gap pulls the beam towards it, a load the
+        # linear answer above leaves out: the gap is the first guess where larger
+        # (a P2 beam on a bonded bed 1.06 mm below under a weak load table: W =
+        # 1.0e-7 m, the answer's 1e4 times that, and every Clarabel rung failed).
+        bonded = scene.contact == "foundation" and scene.foundation.bilateral
+        pull = float(np.max(scene.gap_at(np.linspace(0.0, L, 65)))) if bonded else 0.0
         if W_fixed is not None:
             self.W = float(W_fixed)  # a sweep keeps one scale for all its scenes
-        elif w_lin > 0:
-            self.W = float(w_lin)
+        elif max(w_lin, pull) > 0:
+            self.W = max(float(w_lin), pull)
         else:
             # No load: the answer is w = 0 and any scale serves; a gap of 1e-178 m
             # as the scale would underflow the energy scale.

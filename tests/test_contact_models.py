@@ -92,6 +92,34 @@ def test_bonded_foundation_pulls_and_carries_axial_force(supports):
         assert _error(r, axial=P) <= 1e-6
 
 
+@pytest.mark.parametrize("method", ["convex", "global"])
+def test_bonded_foundation_with_a_gap_under_a_weak_load(method):
+    """A campaign's Gao beam (P2) on a bonded bed 1.06 mm below under a weak load
+    table, P above the bare beam's limit and below the bed's: the linear answer to
+    the load is 1e-7 m, the bed's pull about 1e-3 m.  A first deflection scale from
+    the load alone left the convex program 1e4 times off its answer's size (the
+    quartic term by 1e16), and every Clarabel rung failed, for `global` too (which
+    takes the convex program below the limit).  Now `optimal`, the energy Newton's
+    to 1e-12, and the independent energy of tests/nonconvex_independent.py finds the
+    reported energy that of the deflection and a KKT point."""
+    from nonconvex_campaign_support import TOL_E, TOL_KKT
+    from nonconvex_independent import Discrete
+    scene = Scene.from_dict({
+        "beam": {**BEAM, "model": "gao", "supports": "P2", "half_thickness": 0.15},
+        "load": {"q": [[0.0628, -1850843.349585431], [0.2059, 620288.949304483]],
+                 "axial": 8065152295.1989565},
+        "mesh": {"elements": 41},
+        "foundation": {"gap": 0.0010568822567991317, "stiffness": 7189601419.6274805,
+                       "kind": "bilateral"}})
+    r = solve(scene, method)
+    assert r.status == "optimal", r.message
+    assert r.energy == pytest.approx(solve(scene, "newton").energy, rel=1e-12)
+    en = Discrete(scene, float(np.max(np.abs(r.w))))
+    x = en.from_nodal(r.w, r.slope)
+    assert abs(en.energy(x) - r.energy) <= TOL_E * en.parts_scale(x) * en.E0
+    assert en.kkt(x)["stationarity"] <= TOL_KKT
+
+
 def test_bonded_foundation_energy_at_rest_and_scene_keys():
     """E(w) includes 1/2 k (w - g)^2 everywhere: w = 0 costs 1/2 k g^2 L."""
     r = solve(bonded("P4", 32, q=0.0, gap=1e-3), "newton")
