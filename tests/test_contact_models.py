@@ -92,25 +92,36 @@ def test_bonded_foundation_pulls_and_carries_axial_force(supports):
         assert _error(r, axial=P) <= 1e-6
 
 
+_WEAK_LOADS = {
+    "8701:5089": {"beam": {**BEAM, "model": "gao", "supports": "P2", "half_thickness": 0.15},
+                  "load": {"q": [[0.0628, -1850843.349585431], [0.2059, 620288.949304483]],
+                           "axial": 8065152295.1989565},
+                  "mesh": {"elements": 41},
+                  "foundation": {"gap": 0.0010568822567991317, "stiffness": 7189601419.6274805,
+                                 "kind": "bilateral"}},
+    "8701:5228": {"beam": {**BEAM, "model": "gao", "supports": "P1"},
+                  "load": {"q": [[0.1661, -111.5714075239567], [0.602, -143.8847301794534],
+                                 [0.9658, -991.0787057087969]], "axial": 11826344258.132591},
+                  "mesh": {"elements": 10},
+                  "foundation": {"gap": 0.0005144502027189994, "stiffness": 148978363374.70148,
+                                 "kind": "bilateral"}}}
+
+
+@pytest.mark.parametrize("name", sorted(_WEAK_LOADS))
 @pytest.mark.parametrize("method", ["convex", "global"])
-def test_bonded_foundation_with_a_gap_under_a_weak_load(method):
-    """A campaign's Gao beam (P2) on a bonded bed 1.06 mm below under a weak load
-    table, P above the bare beam's limit and below the bed's: the linear answer to
-    the load is 1e-7 m, the bed's pull about 1e-3 m.  A first deflection scale from
-    the load alone left the convex program 1e4 times off its answer's size (the
-    quartic term by 1e16), and every Clarabel rung failed, for `global` too (which
-    takes the convex program below the limit).  Now `optimal`, the energy Newton's
-    to 1e-12, and the independent energy of tests/nonconvex_independent.py finds the
-    reported energy that of the deflection and a KKT point."""
+def test_bonded_foundation_with_a_gap_under_a_weak_load(name, method):
+    """A campaign's Gao beams on bonded beds 1.06 mm and 0.51 mm below under weak
+    load tables, P above the bare beam's limit and below the bed's (0.993 of it in
+    the second): the linear answers to the loads are 1e-7 m and 1e-11 m, the beds'
+    pull about 1e-3 m and 5e-4 m.  A first deflection scale from the load alone
+    left the convex program 1e4 and 1e7 times off its answer's size, and Clarabel
+    failed ("no solution", "unbounded"), for `global` too (which takes the convex
+    program below the limit).  Now `optimal`, the energy Newton's to 1e-12, and the
+    independent energy of tests/nonconvex_independent.py finds the reported energy
+    that of the deflection and a KKT point."""
     from nonconvex_campaign_support import TOL_E, TOL_KKT
     from nonconvex_independent import Discrete
-    scene = Scene.from_dict({
-        "beam": {**BEAM, "model": "gao", "supports": "P2", "half_thickness": 0.15},
-        "load": {"q": [[0.0628, -1850843.349585431], [0.2059, 620288.949304483]],
-                 "axial": 8065152295.1989565},
-        "mesh": {"elements": 41},
-        "foundation": {"gap": 0.0010568822567991317, "stiffness": 7189601419.6274805,
-                       "kind": "bilateral"}})
+    scene = Scene.from_dict(_WEAK_LOADS[name])
     r = solve(scene, method)
     assert r.status == "optimal", r.message
     assert r.energy == pytest.approx(solve(scene, "newton").energy, rel=1e-12)
