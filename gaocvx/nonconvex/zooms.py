@@ -20,6 +20,7 @@ from __future__ import annotations
 import logging
 
 import numpy as np
+from scipy.sparse.csgraph import connected_components
 
 from .equilibrium import MERGE, same_point
 
@@ -135,21 +136,11 @@ def clusters(search, S, out, lo, hi, step, minimisers) -> list:
     step = np.asarray(step, float)
     pts = [np.asarray(e.amplitudes, float) for e in out]
     idx = [i for i, s in enumerate(pts) if not same_point(s, 0.0, S)]
-    group = {i: i for i in idx}
-
-    def root(i):
-        while group[i] != i:
-            i = group[i]
-        return i
-
-    for a in idx:
-        for b in idx:
-            if a < b and np.all(np.abs(pts[a] - pts[b]) <= CLUSTER_STEPS * step):
-                group[root(b)] = root(a)
-    members = {}
-    for i in idx:
-        members.setdefault(root(i), []).append(i)
-    groups = sorted((g for g in members.values() if sum(out[i].stable for i in g) >= 2),
+    P = np.array([pts[i] for i in idx]).reshape(-1, 2)
+    linked = np.all(np.abs(P[:, None, :] - P[None, :, :]) <= CLUSTER_STEPS * step, axis=2)
+    count, label = connected_components(linked, directed=False)
+    members = [[idx[j] for j in np.flatnonzero(label == c)] for c in range(count)]
+    groups = sorted((g for g in members if sum(out[i].stable for i in g) >= 2),
                     key=lambda g: min(out[i].energy for i in g))[:MAX_CLUSTERS]
     for g in groups:
         s = np.array([pts[i] for i in g])
