@@ -205,6 +205,37 @@ def test_mixed_certificate_agrees_with_the_hermite_one():
             assert mixed[key] == pytest.approx(hermite[key], rel=0.05, abs=1e-13), key
 
 
+@pytest.mark.parametrize("fast", [False, True])
+def test_the_answer_is_certified_once_and_the_certificate_is_its_own(fast, monkeypatch):
+    """The polished answer's certificate, computed when deciding whether the
+    search's best point is kept, is the one returned: it is not computed again,
+    and it equals a fresh certificate of the point returned."""
+    from gaocvx.nonconvex import polish
+    from gaocvx.nonconvex.minimum import solve_global
+
+    calls = []
+    original = polish.certify_answer
+
+    def counted(*args):
+        calls.append(1)
+        return original(*args)
+
+    monkeypatch.setattr(polish, "certify_answer", counted)
+    dp = DiscreteProblem(Scene.from_dict(_data(**POINT)), check_convexity=False)
+    dp, raw, info = solve_global(dp, fast=fast)
+    assert raw["status"] == "optimal" and info["unique"]
+    assert len(calls) == 1
+    from gaocvx.nonconvex.fast_contact import FastContactProgram
+    from gaocvx.nonconvex.modes import unstable_modes
+    from gaocvx.nonconvex.node import NodeProgram
+
+    m = unstable_modes(dp)
+    prog = FastContactProgram(dp, m) if fast else NodeProgram(dp, m)
+    _, residual, _ = polish.answer_certificate(dp, prog, raw["mixed"], raw["u"], raw["lam"])
+    for key, value in raw["residual"].items():
+        assert residual[key] == pytest.approx(value, rel=1e-9, abs=1e-15), key
+
+
 @pytest.mark.parametrize("kw", [FLAT, pytest.param(NEAR_LIMIT, marks=pytest.mark.slow)])
 def test_independent_campaign_checker_finds_no_violation(kw, monkeypatch):
     """The campaign's rules (independent energy, KKT point, nothing found below the

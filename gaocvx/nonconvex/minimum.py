@@ -343,9 +343,10 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
         out.s = start[2]
     best_s, best_u, lam = polish(dp, prog, out.s, out.u, out.lam, lo, hi)
     mf = MixedForm.on_obstacle(dp) if dp.contact == "obstacle" else MixedForm(dp)
-    kept = search_best(dp, prog, mf, out, best_u, lam, 0.5 * GAP_TOL * scale)
+    kept, certified = search_best(dp, prog, mf, out, best_u, lam, 0.5 * GAP_TOL * scale)
     if kept:
         best_s, best_u, lam = out.s, out.u, out.lam
+    chosen = best_u
     best_e = dp.energy(best_u)
     tol = max(out.gap, GAP_TARGET * scale)
 
@@ -353,7 +354,9 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     (best_e, best_u, best_s, lam), alternatives = other_minimisers(
         dp, prog, out, (best_e, best_u, best_s, lam), lo, hi, tol)
 
-    z, residual, lam = answer_certificate(dp, prog, mf, best_u, lam)
+    # (search_best's certificate holds unless another minimiser replaced the answer)
+    z, residual, lam = (certified if certified is not None and best_u is chosen
+                        else answer_certificate(dp, prog, mf, best_u, lam))
     parts = mf.energy_parts(z)
     scale = max(sum(abs(v) for v in parts.values()), floor, 1e-300)
     upper = sum(parts.values())

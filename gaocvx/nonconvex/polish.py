@@ -237,7 +237,7 @@ def answer_certificate(dp, prog, mf, u, lam):
     return (z,) + certify_answer(dp, prog, mf, z, lam)
 
 
-def search_best(dp, prog, mf, out, polished, lam, slack) -> bool:
+def search_best(dp, prog, mf, out, polished, lam, slack) -> tuple:
     """Whether the search's best point ``out.u`` is the answer instead of the ``polished`` one.
 
     ``polished`` are free DOFs with multipliers ``lam``; ``out`` the branch and
@@ -249,12 +249,22 @@ def search_best(dp, prog, mf, out, polished, lam, slack) -> bool:
     ``slack`` above the polished one's (a P3 beam pressed flat at gap 0 by two
     forces of 1.7e8 N: w = 0 passed, the polished point, 2.9e-4 J higher with no
     contact force, did not).
+
+    Returns
+    -------
+    kept : bool
+        Whether ``out.u`` (with ``out.lam``) is the answer.
+    certificate : tuple or None
+        :func:`answer_certificate` of the answer chosen, where it was computed
+        here (None: not computed), so that it need not be computed again.
     """
     if out.u is None or polished is out.u:
-        return False
-    if passes(answer_certificate(dp, prog, mf, polished, lam)[1]):
-        return False
+        return False, None
+    mine = answer_certificate(dp, prog, mf, polished, lam)
+    if passes(mine[1]):
+        return False, mine
     energy = feasible_energy(dp, prog)(out.u)
     if not energy <= dp.energy(polished) + slack:
-        return False
-    return passes(answer_certificate(dp, prog, mf, out.u, out.lam)[1])
+        return False, mine
+    theirs = answer_certificate(dp, prog, mf, out.u, out.lam)
+    return (True, theirs) if passes(theirs[1]) else (False, mine)
