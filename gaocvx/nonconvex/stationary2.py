@@ -51,7 +51,9 @@ every zero is found, so this search is a careful sampling, not a proof:
    certified minimiser is listed itself where no `optimal` stable entry as low is
    that close (:func:`.obstacle_checks.at_global`);
    and the flat beam ``w = 0`` is checked as an equilibrium of its own
-   (:func:`.obstacle_checks.exact_flat`);
+   (:func:`.obstacle_checks.exact_flat`); last, an entry that is not ``optimal``
+   at the mirror image of one that is is settled by the exact image
+   (:func:`.images.settle_twins`);
 6. with an obstacle, second searches on finer grids (:mod:`.zooms`): before
    step 5, over the box of each of the three lowest clusters of equilibria
    closer than 1.5 grid steps with two or more minima among them (a row of
@@ -79,7 +81,7 @@ from functools import partial
 
 import numpy as np
 
-from . import zooms
+from . import images as mirror, zooms
 from .bounds import estimate_boxes, zoom_boxes
 from .contours import curve_zeros, line_zeros
 from .descents import descents as _descents, in_square as _in_square, passes as _passes
@@ -211,7 +213,7 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
         # A symmetric scene's equilibria come in mirror pairs: an image not found
         # seeds both searches again (P1 on an obstacle 1 cm below, k = 2: a beam
         # resting on it just off the middle was found, its image was not)
-        images = _images(dp, modes, grad, out, S) if modes is not None else []
+        images = mirror.seeds(dp, modes, grad, out, S) if modes is not None else []
         if images:
             out += _at_roots(dp, grad, hessian, _newton(grad, hessian, images, S), S, found())
             out += _edge_minima(dp, grad, None, S, found(), floor, images)
@@ -233,6 +235,14 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
             out = zooms.near_flat(partial(find_plane, dp, prog, grid=grid, floor=floor,
                                           modes=modes, zoom=False),
                                   S, out, lo, hi, minimisers)
+        if modes is not None:
+            # an entry that failed the check beside the exact mirror image of one
+            # that passed it is that image (:mod:`.images`)
+            def settle(s):
+                new = _at_roots(dp, grad, hessian, [s], S, strict=True)
+                check_contact(dp, prog, new)
+                return new[0] if new and new[0].status == "optimal" else None
+            out = mirror.settle_twins(dp, modes, grad, out, S, settle)
     out.sort(key=lambda e: e.energy)
     log.info("equilibria (k = 2): %d found from %d seeds, %d solves in %.2f s", len(out),
              len(seeds), len(cache), time.perf_counter() - t0)
@@ -298,22 +308,6 @@ def _at_roots(dp, grad, hessian, roots, S, known=(), strict=False) -> list:
                                [float(x) for x in r], dp.x.copy(), w, slope, res, status,
                                float(dp.P), curvature, float(dp.W)))
     return out
-
-
-def _images(dp, modes, grad, out, S) -> list:
-    """Amplitudes of the mirror images (x -> L - x) of the equilibria found, where
-    mesh and supports are symmetric, less those found already."""
-    from .polish import reflections
-
-    have = [np.asarray(e.amplitudes) for e in out]
-    images = []
-    for e in out:
-        u = grad(np.asarray(e.amplitudes, float))[2]
-        for image in reflections(dp, u)[:1]:
-            s = np.asarray(modes.phi.T @ (dp.G @ image), float)
-            if not any(same_point(s, h, S) for h in have + images):
-                images.append(s)
-    return images
 
 
 def _grid_seeds(grad, axes) -> list:

@@ -1,0 +1,89 @@
+"""Mirror images (x -> L - x) of two-mode equilibria (:mod:`.stationary2`).
+
+Where mesh and supports are symmetric (:func:`.polish.reflections`), the mirror
+image of an equilibrium is one of the same energy and stability if the load is
+symmetric too.  The search uses images twice: as seeds where an image was not
+found (:func:`seeds`), and to settle an entry that is not ``optimal`` where it
+stands for the image of an ``optimal`` one (:func:`settle_twins`).  Neither
+assumes the load symmetric: a seed is only a seed, and a twin is replaced only
+by an image that passes the search's own tests.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from .equilibrium import MERGE, same_point
+from .polish import reflections
+
+__all__ = ["seeds", "settle_twins"]
+
+log = logging.getLogger(__name__)
+
+
+def _image(dp, modes, grad, e):
+    """The amplitudes of the mirror image of equilibrium ``e`` (None: no symmetry)."""
+    u = grad(np.asarray(e.amplitudes, float))[2]
+    return next((np.asarray(modes.phi.T @ (dp.G @ r), float) for r in reflections(dp, u)[:1]),
+                None)
+
+
+def seeds(dp, modes, grad, out, S) -> list:
+    """Amplitudes of the mirror images of the equilibria ``out``, less those found
+    already (within MERGE S).
+
+    ``grad(s)`` is the search's cached ``(F, ∇F, u, ok)``; ``S`` the square's size.
+    """
+    have = [np.asarray(e.amplitudes) for e in out]
+    images = []
+    for e in out:
+        s = _image(dp, modes, grad, e)
+        if s is not None and not any(same_point(s, h, S) for h in have + images):
+            images.append(s)
+    return images
+
+
+def settle_twins(dp, modes, grad, out, S, settle) -> list:
+    """``out`` with each entry that is not ``optimal`` but is the mirror image of an
+    ``optimal`` one (within MERGE of its own amplitudes' size) settled by that image.
+
+    ``settle(s)`` is the search's equilibrium at amplitudes ``s`` if it is a zero of
+    ``∇F`` to the tolerance that passes the optimality conditions (``optimal``), else
+    None.  Where an ``optimal`` entry already stands at the image, the twin is
+    dropped (a copy of it); where ``settle`` returns one, it replaces the twin;
+    else the twin stays as it is (the load is not symmetric, or the image is no
+    equilibrium the search can certify).
+
+    (A P1 beam at gap 0 under a uniform load, 8 elements: a saddle listed
+    ``optimal`` and, 3e-16 of its deflection from its exact image, the image
+    ``inaccurate`` -- the same equilibrium, one failing the check by round-off.)
+    The distance is relative to the entry's own amplitudes, not to ``S``: near
+    the flat beam distinct equilibria lie closer than MERGE S (:mod:`.zooms`), and
+    the flat beam itself is left to :func:`.obstacle_checks.exact_flat`.
+    """
+    def twin(s, a):
+        size = float(np.linalg.norm(a))
+        return size > MERGE * S and same_point(s, a, size)
+
+    optimal = [e for e in out if e.status == "optimal"]
+    if not optimal or all(e.status == "optimal" for e in out):
+        return out
+    images = [s for s in (_image(dp, modes, grad, e) for e in optimal) if s is not None]
+    result = []
+    for e in out:
+        s = None if e.status == "optimal" else next(
+            (s for s in images if twin(s, e.amplitudes)), None)
+        if s is None:
+            result.append(e)
+            continue
+        if any(twin(s, o.amplitudes) for o in optimal):
+            log.info("equilibria: the entry at s = %s is a copy of an image listed: dropped",
+                     e.amplitudes)
+            continue
+        new = settle(s)
+        if new is not None:
+            log.info("equilibria: the entry at s = %s settled by its mirror image", e.amplitudes)
+        result.append(e if new is None else new)
+    return result
