@@ -56,9 +56,10 @@ def settle_twins(dp, modes, grad, out, S, settle) -> list:
     else the twin stays as it is (the load is not symmetric, or the image is no
     equilibrium the search can certify).
 
-    (A P1 beam at gap 0 under a uniform load, 8 elements: a saddle listed
-    ``optimal`` and, 3e-16 of its deflection from its exact image, the image
-    ``inaccurate`` -- the same equilibrium, one failing the check by round-off.)
+    (A P1 beam at gap 0 under a uniform load, 16 elements: near the flat beam a
+    saddle listed ``optimal`` and, 1e-7 of its size from its exact image, the
+    image ``inaccurate`` -- the same equilibrium, one failing the check by
+    round-off at 1.3e-5 m of deflection.)
     The distance is relative to the entry's own amplitudes, not to ``S``: near
     the flat beam distinct equilibria lie closer than MERGE S (:mod:`.zooms`), and
     the flat beam itself is left to :func:`.obstacle_checks.exact_flat`.
