@@ -232,3 +232,20 @@ def test_api_doc_import_line_names_the_equilibrium_functions():
              for n in line[len("from gaocvx import "):].split(",")}
     assert {"equilibria", "equilibrium_path", "Equilibrium", "EquilibriumPath"} <= names
     assert all(hasattr(gaocvx, n) for n in names)
+
+
+def test_mirror_minima_just_above_the_limit_are_both_global():
+    """Without load a P4 beam's two buckled minima are mirror images (w -> -w): both
+    are global minimisers at every force above the limit.  At 1.000001 P_bar_h
+    (12 elements) the energy, -1.7e-5 J, is far below its parts (67 J), and the
+    computed energies differed by 1.9e-9 of the total: a tie relative to the
+    total marked one of them only."""
+    data = {**P4, "load": {}, "mesh": {"elements": 12}}
+    P = 1168009282.1544018   # P_bar_h (1 + 1e-6)
+    pts = equilibrium_path(data, [P]).at(P)
+    stable = [p for p in pts if p["stable"]]
+    assert len(stable) == 2 and stable[0]["w_c"] == pytest.approx(-stable[1]["w_c"], rel=1e-6)
+    assert all(p["global"] for p in stable)
+    assert not any(p["global"] for p in pts if not p["stable"])
+    r = solve(Scene.from_dict({**data, "load": {"axial": P}}), "global")
+    assert r.status == "optimal" and r.extra["global"]["unique"] is False

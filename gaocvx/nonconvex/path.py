@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import SceneError, SolverError
+from .equilibrium import global_minima
 
 __all__ = ["EquilibriumPath", "equilibrium_path", "characteristic_point"]
 
@@ -230,13 +231,11 @@ def equilibrium_path(scene, P_values, elements: int | None = None, x_c: float | 
             failures[P] = str(exc)
             log.warning("path: P = %.4g N failed: %s", P, exc)
             eqs = []
-        lowest = min((e.energy for e in eqs), default=None)
         # Mirror images are both global minimisers: ties within round-off count.
-        tie = 1e-9 * max((abs(e.energy) for e in eqs), default=0.0)
-        for e in eqs:
+        for e, best in zip(eqs, global_minima(eqs)):
             points.append({"P": P, "w_c": e.deflection_at(x_c),
                            "max_abs_w": float(np.max(np.abs(e.w))), "energy": e.energy,
-                           "stable": e.stable, "global": e.energy <= lowest + tie,
+                           "stable": e.stable, "global": best,
                            "amplitude": e.amplitudes[0] if e.amplitudes else None,
                            "status": e.status})
         # Warm start: the next force samples these amplitudes first (a force

@@ -25,11 +25,10 @@ from pathlib import Path
 
 import numpy as np
 
+from .equilibrium import TIE, global_minima
+
 __all__ = ["save_equilibria_plot", "equilibria_figure", "save_path_plot", "energy_digits"]
 
-# Energies closer than this fraction of the largest |energy| are one value to
-# round-off (mirror images): as path.py ties global minimisers.
-TIE = 1e-9
 # Points per picture along the beam (and every node): smooth at any mesh.
 SAMPLES = 801
 
@@ -112,11 +111,8 @@ def equilibria_figure(eqs, scene):
     draw_surfaces(ax, scene, xs, span, scale=1e3)
     energies = [e.energy for e in eqs]
     digits = energy_digits(energies)
-    lowest = min(energies, default=0.0)
-    tie = TIE * max((abs(v) for v in energies), default=0.0)
-    for e in eqs:
+    for e, best in zip(eqs, global_minima(eqs)):
         x, w = _smooth(e, xs)
-        best = e.energy <= lowest + tie
         ax.plot(x, w * 1e3, "-" if e.stable else "--", lw=2 if best else 1.2,
                 label=f"{'stable' if e.stable else 'unstable'}, {e.energy:.{digits}g} J"
                       + (" (global minimum)" if best else ""))

@@ -217,6 +217,9 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                 return _classify(dF, 0.0, 1e-6 * S)
             out = sorted(exact_flat(dp, modes, out, classify, S=S), key=lambda e: e.energy)
     if out and all(e is not None for e in out):
+        for e in out:
+            parts = dp.energy_parts(dp.from_physical(e.w, e.slope))
+            e.energy_scale = float(sum(abs(v) for v in parts.values()) * dp.E0)
         return out
     # A zero of F' whose slice failed, or no equilibrium at all (the global
     # minimiser is always one): the list would be wrong without saying so.  A
