@@ -61,7 +61,8 @@ class DiscreteProblem(HermiteEnergy):
     nodes : array_like, optional
         An explicit mesh instead of equal elements.
     W : float, optional
-        The deflection scale [m]; by default the size of the linear answer.
+        The deflection scale [m]; by default the size of the linear answer, or
+        a bonded foundation's largest gap where larger.
 
     Attributes
     ----------
@@ -75,6 +76,9 @@ class DiscreteProblem(HermiteEnergy):
         Non-dimensional load vector on the free DOFs.
     W, E0 : float
         Deflection scale [m] and energy scale [J].
+    bonded_pull : float
+        A bonded foundation's largest gap [m] (0 without one): it pulls the beam
+        that far whatever the load.
     p, a, c, g : float
         Non-dimensional axial force, Gao coefficient, foundation stiffness
         and foundation/obstacle level (0 when absent).
@@ -221,6 +225,7 @@ class DiscreteProblem(HermiteEnergy):
         # 1.0e-7 m, the answer's 1e4 times that, and every Clarabel rung failed).
         bonded = scene.contact == "foundation" and scene.foundation.bilateral
         pull = float(np.max(scene.gap_at(np.linspace(0.0, L, 65)))) if bonded else 0.0
+        self.bonded_pull = pull
         if W_fixed is not None:
             self.W = float(W_fixed)  # a sweep keeps one scale for all its scenes
         elif max(w_lin, pull) > 0:

@@ -219,7 +219,13 @@ def _solve_values(scene: Scene, key: str, values, method: str | None):
                     result = solve(s, "global")
                 else:
                     dp = DiscreteProblem(s, W=W)
-                    W = dp.W if W is None else W
+                    if W is not None and dp.bonded_pull > W:
+                        # A bonded bed whose gap lies beyond the kept scale pulls the
+                        # beam that far: the scene's own scale, from here on (a P4
+                        # beam under a weak load, gaps 0 then 1 cm: the convex
+                        # program at the first scene's 1.2e-7 m failed at every rung)
+                        dp, warm = DiscreteProblem(s), None
+                    W = dp.W
                     # "auto" stays auto: an answer Newton cannot certify gets convex's.
                     asked = "auto" if (method or s.solve.method) == "auto" else chosen
                     result = solve(s, asked, problem=dp,

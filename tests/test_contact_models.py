@@ -104,7 +104,16 @@ _WEAK_LOADS = {
                                  [0.9658, -991.0787057087969]], "axial": 11826344258.132591},
                   "mesh": {"elements": 10},
                   "foundation": {"gap": 0.0005144502027189994, "stiffness": 148978363374.70148,
-                                 "kind": "bilateral"}}}
+                                 "kind": "bilateral"}},
+    # (a path campaign's, below the limit, at no axial force and in tension: the
+    # slope scale of the Gao term's cones came from the load alone, 1/2500 of the
+    # answer's slopes, and Clarabel failed at every setting)
+    **{f"8801:P4-{name}": {"beam": {**BEAM, "model": "gao", "supports": "P4"},
+                           "load": {"q": -2658.6281728135764, "axial": axial},
+                           "mesh": {"elements": 8},
+                           "foundation": {"gap": 0.0009942263656678493,
+                                          "stiffness": 12053490348.05367, "kind": "bilateral"}}
+       for name, axial in (("free", 0.0), ("tension", -1.58e9))}}
 
 
 @pytest.mark.parametrize("name", sorted(_WEAK_LOADS))
@@ -116,9 +125,11 @@ def test_bonded_foundation_with_a_gap_under_a_weak_load(name, method):
     pull about 1e-3 m and 5e-4 m.  A first deflection scale from the load alone
     left the convex program 1e4 and 1e7 times off its answer's size, and Clarabel
     failed ("no solution", "unbounded"), for `global` too (which takes the convex
-    program below the limit).  Now `optimal`, the energy Newton's to 1e-12, and the
-    independent energy of tests/nonconvex_independent.py finds the reported energy
-    that of the deflection and a KKT point."""
+    program below the limit).  So did the slope scale of the Gao term's cones for
+    a P4 beam 1 mm above its bed at P = 0 and in tension.  Now `optimal`, the
+    energy Newton's to 1e-12, and the independent energy of
+    tests/nonconvex_independent.py finds the reported energy that of the
+    deflection and a KKT point."""
     from nonconvex_campaign_support import TOL_E, TOL_KKT
     from nonconvex_independent import Discrete
     scene = Scene.from_dict(_WEAK_LOADS[name])
@@ -129,6 +140,25 @@ def test_bonded_foundation_with_a_gap_under_a_weak_load(name, method):
     x = en.from_nodal(r.w, r.slope)
     assert abs(en.energy(x) - r.energy) <= TOL_E * en.parts_scale(x) * en.E0
     assert en.kkt(x)["stationarity"] <= TOL_KKT
+
+
+@pytest.mark.parametrize("method", ["convex", "auto"])
+def test_a_sweep_over_a_bonded_beds_gap_solves_every_gap(method):
+    """A sweep keeps the first scene's deflection scale; over a bonded bed's gap
+    from 0 (answer 1.2e-7 m under the weak load) to 1 cm the bed pulls the beam a
+    hundred thousand times further, and the convex program at the kept scale
+    failed at every rung (an error item).  Each value equals the scene solved on
+    its own by Newton (tension and no axial force alike)."""
+    from gaocvx.sweep import sweep
+    base = Scene.from_dict({**_WEAK_LOADS["8801:P4-free"],
+                            "foundation": {**_WEAK_LOADS["8801:P4-free"]["foundation"], "gap": 0.0}})
+    gaps = [0.0, 1e-5, 1e-3, 1e-2, 1e-4]
+    for gap, r in sweep(base, "foundation.gap", gaps, method=method):
+        assert not isinstance(r, Exception), (gap, r)
+        assert r.status == "optimal", (gap, r.message)
+        alone = solve(base.with_overrides({"foundation.gap": gap}), "newton")
+        assert r.energy == pytest.approx(alone.energy, rel=1e-10, abs=1e-12 * abs(alone.energy)), gap
+        assert np.max(np.abs(r.w - alone.w)) <= 1e-8 * max(np.max(np.abs(alone.w)), 1e-300), gap
 
 
 def test_bonded_foundation_energy_at_rest_and_scene_keys():
