@@ -1023,7 +1023,8 @@ def test_twins_of_mirror_images_are_settled_dropped_or_kept():
     a non-`optimal` entry 1e-9 (relative) from the mirror image of an `optimal`
     one is replaced by what `settle` returns at the exact image, or dropped where
     an `optimal` entry stands at that image already; one settle cannot certify,
-    one 1e-3 from any image, and the flat beam stay as they are."""
+    one 1e-3 from any image, the flat beam, and an entry whose slice failed (no
+    image) stay as they are."""
     from types import SimpleNamespace as E
 
     from gaocvx import DiscreteProblem, Scene
@@ -1037,7 +1038,12 @@ def test_twins_of_mirror_images_are_settled_dropped_or_kept():
     modes = unstable_modes(dp)
     assert modes.k == 2
     phi, G = modes.phi, dp.G
-    grad = lambda s: (0.0, np.zeros(2), phi @ np.asarray(s, float), True)  # noqa: E731
+    failed = np.array([3e-3, 3e-3])   # a slice that failed: no beam (u None)
+
+    def grad(s):
+        s = np.asarray(s, float)
+        return (math.nan, np.zeros(2), None, False) if np.all(s == failed) else \
+            (0.0, np.zeros(2), phi @ s, True)
 
     def image(s):
         return phi.T @ (G @ reflections(dp, phi @ np.asarray(s, float))[0])
@@ -1048,7 +1054,7 @@ def test_twins_of_mirror_images_are_settled_dropped_or_kept():
            E(status="optimal", amplitudes=b), E(status="optimal", amplitudes=image(b)),
            E(status="inaccurate", amplitudes=image(b) * (1 - 1e-9)),
            E(status="optimal", amplitudes=c), E(status="inaccurate", amplitudes=image(c) * (1 + 1e-3)),
-           E(status="inaccurate", amplitudes=np.zeros(2))]
+           E(status="inaccurate", amplitudes=np.zeros(2)), E(status="optimal", amplitudes=failed)]
     settled = []
 
     def settle(s):
@@ -1056,13 +1062,13 @@ def test_twins_of_mirror_images_are_settled_dropped_or_kept():
         return E(status="optimal", amplitudes=np.asarray(s), new=True)
 
     got = settle_twins(dp, modes, grad, list(out), 1.0, settle)
-    assert len(got) == 7 and len(settled) == 1
+    assert len(got) == 8 and len(settled) == 1
     assert np.allclose(settled[0], image(a), rtol=1e-12, atol=0)
     assert got[1].new and got[1].status == "optimal"
-    assert [e for e in got if e is not got[1]] == [out[i] for i in (0, 2, 3, 5, 6, 7)]
+    assert [e for e in got if e is not got[1]] == [out[i] for i in (0, 2, 3, 5, 6, 7, 8)]
     # where settle cannot certify the image, the twin stays as it was
     got = settle_twins(dp, modes, grad, list(out), 1.0, lambda s: None)
-    assert got[1] is out[1] and len(got) == 7
+    assert got[1] is out[1] and len(got) == 8
 
 
 @pytest.mark.slow

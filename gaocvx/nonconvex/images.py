@@ -24,8 +24,11 @@ log = logging.getLogger(__name__)
 
 
 def _image(dp, modes, grad, e):
-    """The amplitudes of the mirror image of equilibrium ``e`` (None: no symmetry)."""
+    """The amplitudes of the mirror image of equilibrium ``e`` (None: no symmetry, or
+    no slice at its amplitudes)."""
     u = grad(np.asarray(e.amplitudes, float))[2]
+    if u is None:
+        return None
     return next((np.asarray(modes.phi.T @ (dp.G @ r), float) for r in reflections(dp, u)[:1]),
                 None)
 
