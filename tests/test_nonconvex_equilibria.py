@@ -337,3 +337,38 @@ def test_near_the_limit_on_a_bonded_bed_all_three_equilibria_are_listed():
     for e in eqs:
         c = check(scene, e, rng)
         assert not c["violations"] and c["verdict"] == ("stable" if e.stable else "unstable"), c
+
+
+def test_a_list_without_a_stable_equilibrium_is_inaccurate(monkeypatch):
+    """The energy is coercive, so a global minimiser exists and is a stable
+    equilibrium: a list with none is wrong somewhere.  With every zero's probes
+    made to fall (so the search labels all unstable), no entry may stay
+    `optimal`; the unchanged search lists a stable one and all `optimal`."""
+    import gaocvx.nonconvex.stationary as st
+
+    scene = Scene.from_dict({**scene_dict("P4", q=-1e6, elements=8),
+                             "load": {"q": -1e6, "axial": 1.5e9}})
+    eqs = equilibria(scene)
+    assert any(e.stable for e in eqs) and all(e.status == "optimal" for e in eqs)
+    monkeypatch.setattr(st, "_classify", lambda dF, r, h: (False, -1.0))
+    eqs = equilibria(scene)
+    assert len(eqs) == 3 and not any(e.stable for e in eqs)
+    assert all(e.status == "inaccurate" for e in eqs)
+
+
+@pytest.mark.parametrize("bed", [False, True])
+def test_at_the_limit_without_load_no_unstable_list_is_optimal(bed):
+    """At P_bar_h (to 1e-12) without load the flat beam is a quartic minimum and the
+    probes' F' is round-off: w = 0 was listed alone, unstable and `optimal`
+    (a path campaign's P4 beam on a unilateral bed at gap 0).  Whichever way the
+    round-off falls, a list with no stable entry is `inaccurate`."""
+    from gaocvx import DiscreteProblem
+    data = {"beam": {"model": "gao", "supports": "P4", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                     "half_thickness": 0.1, "width": 1.0}, "load": {}, "mesh": {"elements": 8}}
+    if bed:
+        data["foundation"] = {"gap": 0.0, "stiffness": 433874763036.29047}
+    P_bar = DiscreteProblem(Scene.from_dict(data)).P_bar_h
+    for factor in (1.0, 1 + 1e-12):
+        eqs = equilibria(Scene.from_dict({**data, "load": {"axial": P_bar * factor}}))
+        assert any(e.stable for e in eqs) or all(e.status == "inaccurate" for e in eqs), \
+            (factor, [(e.stable, e.status) for e in eqs])

@@ -7,6 +7,7 @@ zero; used by :mod:`.stationary`, :mod:`.stationary2` and :mod:`.path`.
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass, field
 
@@ -15,7 +16,9 @@ import numpy as np
 from ..errors import SceneError
 from ..result import extremum
 
-__all__ = ["Equilibrium", "MERGE", "TIE", "same_point", "global_minima"]
+__all__ = ["Equilibrium", "MERGE", "TIE", "same_point", "global_minima", "check_has_minimum"]
+
+log = logging.getLogger(__name__)
 
 #: The searches' merging distance, as a fraction of the amplitude box's size ``S``:
 #: zeros closer than this are taken as one equilibrium. Zeros are polished to far
@@ -48,6 +51,25 @@ def global_minima(eqs) -> list:
     lowest = min(e.energy for e in eqs)
     scale = max(max(abs(e.energy), _finite(getattr(e, "energy_scale", 0.0))) for e in eqs)
     return [e.energy <= lowest + TIE * scale for e in eqs]
+
+
+def check_has_minimum(eqs) -> None:
+    """Without a stable equilibrium in ``eqs``, every entry becomes ``inaccurate`` (in place).
+
+    The energy is coercive (a minimiser exists: the thesis's theorem 1.3), and a
+    global minimiser is a stable equilibrium: where none is listed, one is
+    missing or a stability is wrong, and no entry's ``optimal`` can stand for
+    the list.  (At P = P_bar_h exactly, without load, a P4 beam's flat w = 0, a
+    quartic minimum, was listed alone, unstable and `optimal`: the probes saw
+    round-off.)
+    """
+    if any(e.stable for e in eqs):
+        return
+    log.warning("equilibria: none of the %d equilibria found is stable, but a global "
+                "minimiser exists and is one: the list misses it or a stability is wrong; "
+                "every entry is reported inaccurate", len(eqs))
+    for e in eqs:
+        e.status = "inaccurate"
 
 
 def _finite(x) -> float:
