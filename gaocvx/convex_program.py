@@ -204,14 +204,15 @@ def _slope_scale(mf: MixedForm) -> float:
     cones' variables 1e6 against an objective weight of 1e-17, and Clarabel
     failed at every setting).
     """
-    f = mf.f
+    z = None
     if mf.dp.bilateral and np.any(mf.dp.g != 0):
         f = -mf.gradient(np.zeros(mf.n))   # the load and the bed's pull at w = 0
         try:
             z = BandedCholesky(_compressed_form(mf)).solve(f)
-        except SceneError:    # no convex form: the load's estimate
-            f = mf.f
-    if f is mf.f:
+        except SceneError:    # no convex form: the load's estimate below
+            pass
+    if z is None:
+        f = mf.f
         z, _ = mf.quadratic_factor.solve(f, np.zeros(mf.N))
     s = mf.B1 @ z
     A = float(f @ z)
