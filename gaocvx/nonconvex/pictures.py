@@ -46,17 +46,21 @@ def _title(scene) -> str:
     return f"{b.model} {b.supports}, q = {q} N/m{extra}"
 
 
-def energy_digits(energies, least: int = 4, most: int = 12) -> int:
+def energy_digits(energies, least: int = 4, most: int = 12, scale: float = 0.0) -> int:
     """Significant digits that print every two distinct energies differently.
 
-    Energies within ``TIE`` times the largest ``|energy|`` of each other are
-    one value (mirror images) and may print alike.
+    Energies within ``TIE`` times the largest ``|energy|`` (or ``scale``, where
+    larger) of each other are one value (mirror images) and may print alike.
 
     Parameters
     ----------
     energies : sequence of float
     least, most : int
         The range of digits returned.
+    scale : float
+        The energies' round-off scale [J] (:attr:`.equilibrium.Equilibrium.energy_scale`;
+        just above the limit the total is far below its parts), as
+        :func:`.equilibrium.global_minima` ties them.
 
     Returns
     -------
@@ -72,7 +76,7 @@ def energy_digits(energies, least: int = 4, most: int = 12) -> int:
     4
     """
     e = np.sort(np.asarray(energies, float))
-    tie = TIE * float(np.max(np.abs(e), initial=0.0))
+    tie = TIE * max(float(np.max(np.abs(e), initial=0.0)), scale)
     # Rounding is monotone: neighbours printed apart keep every pair apart.
     pairs = [(a, b) for a, b in zip(e[:-1], e[1:]) if b - a > tie]
     for digits in range(least, most):
@@ -110,7 +114,8 @@ def equilibria_figure(eqs, scene):
     span = max([float(np.max(np.abs(e.w))) for e in eqs] + [0.0]) * 1e3 or 1.0
     draw_surfaces(ax, scene, xs, span, scale=1e3)
     energies = [e.energy for e in eqs]
-    digits = energy_digits(energies)
+    scales = [e.energy_scale for e in eqs if np.isfinite(e.energy_scale)]
+    digits = energy_digits(energies, scale=max(scales, default=0.0))
     for e, best in zip(eqs, global_minima(eqs)):
         x, w = _smooth(e, xs)
         ax.plot(x, w * 1e3, "-" if e.stable else "--", lw=2 if best else 1.2,
