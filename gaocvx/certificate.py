@@ -75,7 +75,7 @@ def penalty_range(mf: MixedForm) -> tuple[float, float]:
     return 10.0, min(1e3 * 12.0 / (GAUSS_OFFSET * h) ** 3, RHO_CAP) * ratio
 
 
-def certify(mf: MixedForm, z, lam=None) -> dict:
+def certify(mf: MixedForm, z, lam=None, size: float = 0.0) -> dict:
     """Optimality measures of ``z`` (and obstacle multipliers) in the mixed form.
 
     ``stationarity``: relative Newton decrement of the Lagrangian on the
@@ -84,23 +84,30 @@ def certify(mf: MixedForm, z, lam=None) -> dict:
     also ``feasibility`` (largest violation of w >= g relative to the answer's
     largest deflection), ``dual`` (most negative multiplier, relative) and
     ``complementarity`` (relative to the answer's energy).
+
+    ``size`` is the answer's size in energy-norm units where the caller knows a
+    better one than the energy's own norm (:meth:`MixedForm.scale`), which
+    above ``P_bar_h`` is no norm (the global method's, without an obstacle:
+    :func:`gaocvx.nonconvex.certificate.certify_answer`); the larger is used.
     """
     if mf.n == 0:
         return {"stationarity": 0.0}
     H = mf.hessian(z)
-    out = {"stationarity": _stationarity(mf, z, lam, H)}
+    scale = max(mf.scale(z, H), size)
+    out = {"stationarity": _stationarity(mf, z, lam, H, scale)}
     # w = 0 is admissible with energy 0 (g <= 0; a bonded foundation's 1/2 c g^2 L),
     # so the minimum is at most that: more beyond round-off is no minimiser.
     energy = sum(mf.energy_parts(z).values()) - mf.energy_at_rest()
-    if energy > COMPLEMENTARITY_TOL * mf.scale(z, H) ** 2:
+    if energy > COMPLEMENTARITY_TOL * scale ** 2:
         out["stationarity"] = math.inf
     if lam is not None:
         out.update(_obstacle_measures(mf, z, lam, mf.gap(z), H))
     return out
 
 
-def _stationarity(mf: MixedForm, z, lam, H) -> float:
-    """Relative Newton decrement of the Lagrangian at (z, lam); H: the energy's Hessian.
+def _stationarity(mf: MixedForm, z, lam, H, scale=None) -> float:
+    """Relative Newton decrement of the Lagrangian at (z, lam); H: the energy's Hessian,
+    ``scale`` the answer's size (by default :meth:`MixedForm.scale`).
 
     The decrement is computed by a solve with H, which near P_bar_h (H nearly
     singular) can lose every digit: the solve's own residual is then solved
@@ -113,7 +120,7 @@ def _stationarity(mf: MixedForm, z, lam, H) -> float:
     factor = mf.quadratic_factor if mf.dp.is_quadratic else mf.kkt_factor(H)
     rhs_z, rhs_c = -g, -mf.link(z)
     d, mu = factor.solve(rhs_z, rhs_c)
-    scale = mf.scale(z, H)
+    scale = mf.scale(z, H) if scale is None else scale
     decrement = _decrement(d, H, scale) * scale
     check, _ = factor.solve(rhs_z - (H @ d + mf.C.T @ mu), rhs_c - mf.C @ d)
     error = math.sqrt(abs(float(check @ (H @ check))))

@@ -122,6 +122,26 @@ def test_stiff_unilateral_bed_just_above_the_limit_is_certified():
     assert r.status == "optimal", r.message
 
 
+def test_answer_held_by_a_stiff_bed_against_its_buckling_is_certified():
+    """Hidden-scene campaign seed 8901: just above the limit the bed, not the Gao
+    term, holds the beam (0.19 mm below it, 5.7e12 N/m^2), and the answer's own
+    energy norm is negative (bending minus axial -1.0e-4 against Gao 4.2e-6 and the
+    bed's 1.5e-6 on its penetration): the certificate measured a Newton step of
+    round-off (|d| 9e-16 of |z| 0.47) against the zero floor, 4.3e-11, and failed
+    (stationarity 1.8e-4, inaccurate) although the gap was 9.4e-16 of the scale.
+    The independent energy's checks (a KKT point, a local minimum, a multi-start
+    finding nothing below the bound) hold."""
+    data = {"beam": {"model": "gao", "supports": "P2", "length": 0.5, "E": 2.1e11, "nu": 0.3,
+                     "half_thickness": 0.15, "width": 1.0},
+            "load": {"q": -106894.74334576636, "axial": 32260606462.571064},
+            "mesh": {"elements": 12},
+            "foundation": {"gap": 0.0001880089266298119, "stiffness": 5734715457074.611}}
+    from campaign import Case
+    rec = run_case(Case(data, ("P2", "foundation", "near-limit"), "8901"), starts=12, seed=1)
+    assert not rec["violations"], rec["violations"]
+    assert rec["status"] == "optimal", rec.get("message")
+
+
 def test_a_node_program_stopped_short_is_split_not_closed():
     """P1 at 3 P_bar_h on a unilateral bed, 256 elements (k = 2): one fast-path node's
     line search stalled at a box corner, its value 815 above its (valid, loose) bound.

@@ -374,6 +374,13 @@ class MixedForm:
         foundation with a gap that made the scale, and with it every relative
         measure, far too large (a Newton answer 0.3-2.6 % wrong was certified).
         """
+        return math.sqrt(max(self.energy_norm2(z, H), 0.0))
+
+    def energy_norm2(self, z, H) -> float:
+        """The square of :meth:`energy_norm`, not clipped: above ``P_bar_h`` the
+        bending and axial terms are indefinite, and a beam a bed holds against
+        its buckling has a negative one (the global method's certificate adds the
+        modes' part, :func:`gaocvx.nonconvex.certificate.certify_answer`)."""
         base = Hessian(self, H.gao)
         za = self.absolute(z)
         norm2 = float(za @ (base @ za))
@@ -384,7 +391,7 @@ class MixedForm:
             norm2 += float((self.dp.c * self.wqc) @ (w * w))
         elif H.foundation is not None:
             norm2 += float(H.foundation @ self.depth(z) ** 2)
-        return math.sqrt(max(norm2, 0.0))
+        return norm2
 
     def scale(self, z, H) -> float:
         """The size of the answer: its own energy norm; 1 without any load.

@@ -47,7 +47,8 @@ import scipy.optimize as so
 from ..certificate import certify
 from ..tolerances import TOUCH_TOL, complementarity
 
-__all__ = ["psi_certificate", "contact_multipliers", "certify_contact", "certify_answer"]
+__all__ = ["psi_certificate", "contact_multipliers", "certify_contact", "certify_answer",
+           "modes_size"]
 
 
 def psi_certificate(dp, modes, u, lam, rows, levels=None, floor: float = 0.0) -> dict:
@@ -200,11 +201,31 @@ def certify_answer(dp, prog, mf, z, lam) -> tuple:
     path's has a ``certify`` of its own, the same measures in the mixed form).
     """
     if dp.contact != "obstacle":
-        return certify(mf, z, lam), lam
+        return certify(mf, z, lam, size=modes_size(mf, prog.modes, z)), lam
     zfloor = mf.zero_floor if mf.has_load else 0.0
     if hasattr(prog, "certify"):
         return prog.certify(z, mf.no_contact_forces() if lam is None else lam, zfloor)
     return certify_contact(dp, prog.modes, mf.to_hermite(z), lam, prog.rows, prog.levels, zfloor)
+
+
+def modes_size(mf, modes, z) -> float:
+    """The answer's size with the modes' part of :func:`psi_certificate`'s metric:
+    ``sqrt(|z|^2 + 4 sum c_i s_i^2)``, ``|z|`` the energy's own norm.
+
+    Above ``P_bar_h`` the energy's own norm (:meth:`gaocvx.mixed.MixedForm.energy_norm`)
+    is no size: its bending and axial terms are indefinite, and where a bed (not
+    the Gao term) holds the beam against its buckling, and counts only on its
+    penetration, it is negative (measured just above the limit on a stiff bed:
+    bending minus axial -1.0e-4, Gao 4.2e-6, the bed 1.5e-6).  The certificate
+    then fell back on the zero floor and measured a Newton step of round-off
+    against it.  ``4 sum c_i s_i^2`` (the modes' part of ``H_psi``, with ``s_i``
+    the amplitudes ``(G phi_i)' u``) makes it the size of the convex part's
+    metric, as with an obstacle.
+    """
+    H = mf.hessian(z)
+    s = np.asarray(mf.dp.G @ modes.phi).T @ mf.to_hermite(z)
+    norm2 = mf.energy_norm2(z, H) + 4.0 * float(np.sum(modes.c * s * s))
+    return math.sqrt(max(norm2, 0.0))
 
 
 def contact_polish(dp, u, lam, rows, levels, max_iter: int = 12):
