@@ -122,6 +122,13 @@ def test_stiff_unilateral_bed_just_above_the_limit_is_certified():
     assert r.status == "optimal", r.message
 
 
+_HELD_BY_BED = {"beam": {"model": "gao", "supports": "P2", "length": 0.5, "E": 2.1e11, "nu": 0.3,
+                         "half_thickness": 0.15, "width": 1.0},
+                "load": {"q": -106894.74334576636, "axial": 32260606462.571064},
+                "mesh": {"elements": 12},
+                "foundation": {"gap": 0.0001880089266298119, "stiffness": 5734715457074.611}}
+
+
 def test_answer_held_by_a_stiff_bed_against_its_buckling_is_certified():
     """Hidden-scene campaign seed 8901: just above the limit the bed, not the Gao
     term, holds the beam (0.19 mm below it, 5.7e12 N/m^2), and the answer's own
@@ -131,15 +138,47 @@ def test_answer_held_by_a_stiff_bed_against_its_buckling_is_certified():
     (stationarity 1.8e-4, inaccurate) although the gap was 9.4e-16 of the scale.
     The independent energy's checks (a KKT point, a local minimum, a multi-start
     finding nothing below the bound) hold."""
-    data = {"beam": {"model": "gao", "supports": "P2", "length": 0.5, "E": 2.1e11, "nu": 0.3,
-                     "half_thickness": 0.15, "width": 1.0},
-            "load": {"q": -106894.74334576636, "axial": 32260606462.571064},
-            "mesh": {"elements": 12},
-            "foundation": {"gap": 0.0001880089266298119, "stiffness": 5734715457074.611}}
     from campaign import Case
-    rec = run_case(Case(data, ("P2", "foundation", "near-limit"), "8901"), starts=12, seed=1)
+    rec = run_case(Case(_HELD_BY_BED, ("P2", "foundation", "near-limit"), "8901"), starts=12, seed=1)
     assert not rec["violations"], rec["violations"]
     assert rec["status"] == "optimal", rec.get("message")
+
+
+@pytest.mark.parametrize("shape", ["mode", "smooth", "random"])
+def test_the_certificate_of_an_answer_held_by_a_bed_still_rejects_a_displaced_one(shape):
+    """The size the certificate measures against grew for the answer above (the modes'
+    part of the H_psi metric); a deflection displaced by 1e-6 of its size still fails
+    it, along the buckling mode, a smooth shape or a random one (measured
+    stationarity 5e-5, 4e-4, 2e-2 against the tolerance 1e-6)."""
+    from types import SimpleNamespace
+
+    from gaocvx.certificate import passes
+    from gaocvx.mixed import MixedForm
+    from gaocvx.nonconvex.certificate import certify_answer
+    from gaocvx.nonconvex.modes import unstable_modes
+    from gaocvx.nonconvex.polish import to_mixed
+
+    r = solve(Scene.from_dict(_HELD_BY_BED), "global")
+    dp = r.problem
+    full = np.empty(2 * len(r.x))
+    full[0::2], full[1::2] = r.w / dp.W, r.slope * dp.L / dp.W
+    u = full[dp.free]
+    mf, prog = MixedForm(dp), SimpleNamespace(modes=unstable_modes(dp))
+
+    def certificate(u):
+        return certify_answer(dp, prog, mf, mf.on_manifold(to_mixed(mf, u)), None)[0]
+
+    assert passes(certificate(u))
+    if shape == "mode":
+        d = prog.modes.phi[:, 0]
+    elif shape == "smooth":
+        d = np.empty_like(full)
+        d[0::2], d[1::2] = np.sin(3 * np.pi * dp.xi), 3 * np.pi * np.cos(3 * np.pi * dp.xi)
+        d = d[dp.free]
+    else:
+        d = np.random.default_rng(0).standard_normal(len(u))
+    displaced = u + 1e-6 * np.max(np.abs(u)) * d / np.max(np.abs(d))
+    assert not passes(certificate(displaced))
 
 
 def test_a_node_program_stopped_short_is_split_not_closed():
