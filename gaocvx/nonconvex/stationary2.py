@@ -243,6 +243,8 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
                 check_contact(dp, prog, new)
                 return new[0] if new and new[0].status == "optimal" else None
             out = mirror.settle_twins(dp, modes, grad, out, S, settle)
+            out = mirror.complete_pairs(dp, modes, grad, out, S,
+                                        lambda s: settle(_newton(grad, hessian, [s], S)[0]))
     out.sort(key=lambda e: e.energy)
     log.info("equilibria (k = 2): %d found from %d seeds, %d solves in %.2f s", len(out),
              len(seeds), len(cache), time.perf_counter() - t0)
