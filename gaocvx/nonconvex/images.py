@@ -2,11 +2,12 @@
 
 Where mesh and supports are symmetric (:func:`.polish.reflections`), the mirror
 image of an equilibrium is one of the same energy and stability if the load is
-symmetric too.  The search uses images twice: as seeds where an image was not
-found (:func:`seeds`), and to settle an entry that is not ``optimal`` where it
-stands for the image of an ``optimal`` one (:func:`settle_twins`).  Neither
-assumes the load symmetric: a seed is only a seed, and a twin is replaced only
-by an image that passes the search's own tests.
+symmetric too.  The search uses images three times: as seeds where an image was
+not found (:func:`seeds`), to settle an entry that is not ``optimal`` where it
+stands for the image of an ``optimal`` one (:func:`settle_twins`), and, last, to
+try once more the image of an ``optimal`` entry that is still not listed
+(:func:`complete_pairs`).  None assumes the load symmetric: a seed is only a
+seed, and an image is listed only where it passes the search's own tests.
 """
 
 from __future__ import annotations
