@@ -452,12 +452,19 @@ def test_branch_and_bound_time_limit_ends_uncertified(monkeypatch):
 def test_mirror_minimiser_reported_just_above_the_limit(eps):
     """Without load the mirror image of a buckled minimiser is one too, however close
     P is to P_bar_h (a new-user trial found unique = true at 1e-9 above it: the leaves
-    around both amplitudes merged into the answer's group)."""
+    around both amplitudes merged into the answer's group).  At 1e-10 the answer is
+    `inaccurate`: p's round-off (DATA_ROUNDOFF) moves the amplitude, sqrt(p - lambda_1)
+    to leading order, by DATA_ROUNDOFF / (2 eps) of itself, 4.4e-6, above the
+    tolerance, and the certificate measures that (closed form to 1 %)."""
+    from gaocvx.certificate import DATA_ROUNDOFF
     data = scene_dict("P4", q=None, elements=16)
     p_bar = DiscreteProblem(Scene.from_dict(data), check_convexity=False).P_bar_h
     data["load"]["axial"] = p_bar * (1.0 + eps)
     r = solve(Scene.from_dict(data), "global")
     g = r.extra["global"]
-    assert r.status == "optimal" and g["unique"] is False and len(g["alternatives"]) == 1
+    sensitivity = DATA_ROUNDOFF / (2 * eps)
+    assert r.residual["stationarity"] == pytest.approx(sensitivity, rel=0.01)
+    assert r.status == ("optimal" if sensitivity <= 1e-6 else "inaccurate")
+    assert g["unique"] is False and len(g["alternatives"]) == 1
     other = np.asarray(g["alternatives"][0]["w"])
     assert np.abs(other + r.w).max() <= 1e-12 * np.abs(r.w).max()   # its mirror image

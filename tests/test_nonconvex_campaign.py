@@ -162,41 +162,69 @@ def test_fast_slices_on_a_stiff_bed_reach_their_slice():
     assert rec["status"] == "optimal", rec.get("message")
 
 
-@pytest.mark.parametrize("shape", ["mode", "smooth", "random"])
-def test_the_certificate_of_an_answer_held_by_a_bed_still_rejects_a_displaced_one(shape):
-    """The size the certificate measures against grew for the answer above (the modes'
-    part of the H_psi metric); a deflection displaced by 1e-6 of its size still fails
-    it, along the buckling mode, a smooth shape or a random one (measured
-    stationarity 5e-5, 4e-4, 2e-2 against the tolerance 1e-6)."""
+def _certified_answer(data):
+    """``solve(scene, "global")``'s answer as free DOFs ``u`` of its own problem, the
+    first mode's shape and the global method's certificate of any ``u``."""
     from types import SimpleNamespace
 
-    from gaocvx.certificate import passes
     from gaocvx.mixed import MixedForm
     from gaocvx.nonconvex.certificate import certify_answer
     from gaocvx.nonconvex.modes import unstable_modes
     from gaocvx.nonconvex.polish import to_mixed
 
-    r = solve(Scene.from_dict(_HELD_BY_BED), "global")
+    r = solve(Scene.from_dict(data), "global")
     dp = r.problem
     full = np.empty(2 * len(r.x))
     full[0::2], full[1::2] = r.w / dp.W, r.slope * dp.L / dp.W
-    u = full[dp.free]
     mf, prog = MixedForm(dp), SimpleNamespace(modes=unstable_modes(dp))
 
     def certificate(u):
         return certify_answer(dp, prog, mf, mf.on_manifold(to_mixed(mf, u)), None)[0]
 
+    return dp, full[dp.free], prog.modes.phi[:, 0], certificate
+
+
+def _displaced(dp, u, d, eps):
+    """``u`` moved along ``d`` by ``eps`` of its largest nodal deflection."""
+    size = np.max(np.abs(dp.full(u)[0::2]))
+    return u + eps * size * d / np.max(np.abs(dp.full(d)[0::2]))
+
+
+@pytest.mark.parametrize("shape", ["mode", "smooth", "random"])
+def test_the_certificate_of_an_answer_held_by_a_bed_still_rejects_a_displaced_one(shape):
+    """The size the certificate measures against grew for the answer above (the modes'
+    part of the H_psi metric); a deflection displaced by 1e-6 of its size still fails
+    it, along the buckling mode, a smooth shape or a random one."""
+    from gaocvx.certificate import passes
+
+    dp, u, mode, certificate = _certified_answer(_HELD_BY_BED)
     assert passes(certificate(u))
     if shape == "mode":
-        d = prog.modes.phi[:, 0]
+        d = mode
     elif shape == "smooth":
-        d = np.empty_like(full)
+        d = np.empty(2 * len(dp.xi))
         d[0::2], d[1::2] = np.sin(3 * np.pi * dp.xi), 3 * np.pi * np.cos(3 * np.pi * dp.xi)
         d = d[dp.free]
     else:
         d = np.random.default_rng(0).standard_normal(len(u))
-    displaced = u + 1e-6 * np.max(np.abs(u)) * d / np.max(np.abs(d))
-    assert not passes(certificate(displaced))
+    assert not passes(certificate(_displaced(dp, u, d, 1e-6)))
+
+
+def test_an_unloaded_answer_smaller_than_its_unit_is_certified_in_its_own_scale():
+    """A helper's probe (scene r71): P2 without load 2.6e-6 above the limit buckles to
+    0.18 of the unit W = 1e-3 L, and the certificate, whose floor is 1 without load
+    (below the limit the answer is w = 0 exactly), accepted the answer displaced
+    along its mode by 4.6e-6 of itself.  It is now re-solved in its own scale: a
+    displacement of 2e-6 fails (stationarity 2e-6: the measure is the displacement)."""
+    from gaocvx.certificate import passes
+
+    data = {"beam": {"model": "gao", "supports": "P2", "length": 0.6030130675465574,
+                     "E": 2.1e11, "nu": 0.053807547469329906,
+                     "half_thickness": 0.05627659413422082, "width": 1.0},
+            "load": {"axial": 1318766679.2396605}, "mesh": {"elements": 8}}
+    dp, u, mode, certificate = _certified_answer(data)
+    assert passes(certificate(u))
+    assert not passes(certificate(_displaced(dp, u, mode, 2e-6)))
 
 
 def test_a_node_program_stopped_short_is_split_not_closed():
