@@ -243,8 +243,9 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
                 check_contact(dp, prog, new)
                 return new[0] if new and new[0].status == "optimal" else None
             out = mirror.settle_twins(dp, modes, grad, out, S, settle)
-            out = mirror.complete_pairs(dp, modes, grad, out, S,
-                                        lambda s: settle(_newton(grad, hessian, [s], S)[0]))
+            # (Newton's end is dropped where F is infinite there: no end, no image)
+            out = mirror.complete_pairs(dp, modes, grad, out, S, lambda s: next(
+                (settle(end) for end in _newton(grad, hessian, [s], S)), None))
     out.sort(key=lambda e: e.energy)
     log.info("equilibria (k = 2): %d found from %d seeds, %d solves in %.2f s", len(out),
              len(seeds), len(cache), time.perf_counter() - t0)
