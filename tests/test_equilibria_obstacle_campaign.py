@@ -1018,17 +1018,11 @@ def test_the_check_confirms_a_descent_from_a_point_within_the_feasibility_tolera
     assert any(not e.stable and abs(e.energy - 4543.0432157) <= 1e-6 for e in eqs)
 
 
-def test_twins_of_mirror_images_are_settled_dropped_or_kept():
-    """`images.settle_twins` on a symmetric P1 beam's modes with hand-made entries:
-    a non-`optimal` entry 1e-9 (relative) from the mirror image of an `optimal`
-    one is replaced by what `settle` returns at the exact image, or dropped where
-    an `optimal` entry stands at that image already; one settle cannot certify,
-    one 1e-3 from any image, the flat beam, and an entry whose slice failed (no
-    image) stay as they are."""
-    from types import SimpleNamespace as E
-
+def _mirror_plane():
+    """A symmetric P1 beam's two modes with a stand-in reduced function for the
+    image tests: every amplitude has the beam ``phi s`` but ``failed``, a slice that
+    failed (no beam); ``image(s)``, the amplitudes of the mirror image of ``phi s``."""
     from gaocvx import DiscreteProblem, Scene
-    from gaocvx.nonconvex.images import settle_twins
     from gaocvx.nonconvex.modes import unstable_modes
     from gaocvx.nonconvex.polish import reflections
 
@@ -1038,7 +1032,7 @@ def test_twins_of_mirror_images_are_settled_dropped_or_kept():
     modes = unstable_modes(dp)
     assert modes.k == 2
     phi, G = modes.phi, dp.G
-    failed = np.array([3e-3, 3e-3])   # a slice that failed: no beam (u None)
+    failed = np.array([3e-3, 3e-3])
 
     def grad(s):
         s = np.asarray(s, float)
@@ -1048,6 +1042,21 @@ def test_twins_of_mirror_images_are_settled_dropped_or_kept():
     def image(s):
         return phi.T @ (G @ reflections(dp, phi @ np.asarray(s, float))[0])
 
+    return dp, modes, failed, grad, image
+
+
+def test_twins_of_mirror_images_are_settled_dropped_or_kept():
+    """`images.settle_twins` on a symmetric P1 beam's modes with hand-made entries:
+    a non-`optimal` entry 1e-9 (relative) from the mirror image of an `optimal`
+    one is replaced by what `settle` returns at the exact image, or dropped where
+    an `optimal` entry stands at that image already; one settle cannot certify,
+    one 1e-3 from any image, the flat beam, and an entry whose slice failed (no
+    image) stay as they are."""
+    from types import SimpleNamespace as E
+
+    from gaocvx.nonconvex.images import settle_twins
+
+    dp, modes, failed, grad, image = _mirror_plane()
     a, b, c = np.array([1e-3, 4e-4]), np.array([-2e-3, 7e-4]), np.array([5e-4, -3e-4])
     assert np.linalg.norm(image(a) - a) > 1e-4   # the images are other points
     out = [E(status="optimal", amplitudes=a), E(status="inaccurate", amplitudes=image(a) * (1 + 1e-9)),
@@ -1102,26 +1111,9 @@ def test_missing_mirror_images_are_completed_where_settled():
     settle cannot certify, or ends on a listed entry."""
     from types import SimpleNamespace as E
 
-    from gaocvx import DiscreteProblem, Scene
     from gaocvx.nonconvex.images import complete_pairs
-    from gaocvx.nonconvex.modes import unstable_modes
-    from gaocvx.nonconvex.polish import reflections
 
-    dp = DiscreteProblem(Scene.from_dict({
-        "beam": {**_BEAM, "supports": "P1"}, "load": {"axial": 1.0666e10},
-        "mesh": {"elements": 8}, "obstacle": {"gap": 0.0}}), check_convexity=False)
-    modes = unstable_modes(dp)
-    phi, G = modes.phi, dp.G
-    failed = np.array([3e-3, 3e-3])
-
-    def grad(s):
-        s = np.asarray(s, float)
-        return (math.nan, np.zeros(2), None, False) if np.all(s == failed) else \
-            (0.0, np.zeros(2), phi @ s, True)
-
-    def image(s):
-        return phi.T @ (G @ reflections(dp, phi @ np.asarray(s, float))[0])
-
+    dp, modes, failed, grad, image = _mirror_plane()
     a, b, c = np.array([1e-3, 4e-4]), np.array([-2e-3, 7e-4]), np.array([5e-4, -3e-4])
     d, f = np.array([2e-3, 1e-3]), np.array([-1e-3, -6e-4])
     out = [E(status="optimal", amplitudes=a),

@@ -203,7 +203,6 @@ def test_equilibria_legend_marks_mirror_images_both_global():
     assert texts[0].split(", ")[1] == texts[1].split(", ")[1]   # no round-off digits shown
 
 
-
 def test_equilibria_legend_ties_images_relative_to_the_energy_scale():
     """Just above the limit the total energy is far below its parts: mirror images
     whose energies differ by 1.9e-9 of the total (round-off against parts 4e6
@@ -215,6 +214,7 @@ def test_equilibria_legend_ties_images_relative_to_the_energy_scale():
     texts = _legend(eqs)
     assert [" (global minimum)" in t for t in texts] == [True, True, False]
     assert texts[0].split(", ")[1] == texts[1].split(", ")[1]
+
 
 # ---------------------------------------------------------------- documented JSON Lines
 
