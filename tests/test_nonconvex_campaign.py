@@ -227,6 +227,37 @@ def test_an_unloaded_answer_smaller_than_its_unit_is_certified_in_its_own_scale(
     assert not passes(certificate(_displaced(dp, u, mode, 2e-6)))
 
 
+def test_a_flat_minimum_the_search_stopped_short_of_is_no_alternative():
+    """A helper's campaign (seed 9301, scene A30): P3 on a unilateral bed at gap 0
+    without load, 4.5e-8 above the limit.  The multi-start's trust region stopped
+    1.5e-3 of the size from the answer, 2e-14 J above it (inside the gap), where
+    the energy is flat along the mode, and the rule called ``unique: true`` a missed
+    alternative; one Newton step on the independent energy takes that point onto
+    the answer (3.6e-6 of the size), so it is none.  The rule still sees a true
+    second minimiser: the mirror image of an unloaded free beam stays distinct."""
+    from campaign import Case
+    from nonconvex_campaign_support import _distinct, _newton
+    from nonconvex_independent import Discrete
+
+    from gaocvx.discrete import DiscreteProblem
+
+    beam = {"model": "gao", "length": 1.0, "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1,
+            "width": 1.0}
+    data = {"beam": {**beam, "supports": "P3"}, "load": {"q": 0.0, "axial": 292000150.74523586},
+            "mesh": {"elements": 24},
+            "foundation": {"gap": 0.0, "stiffness": 186617815428.13553}}
+    rec = run_case(Case(data, ("P3", "foundation", "near-limit"), "A30"), starts=12, seed=30)
+    assert rec["status"] == "optimal" and rec["unique"] and not rec["violations"], rec
+    free = {"beam": {**beam, "supports": "P1"}, "mesh": {"elements": 8}}
+    limit = DiscreteProblem(Scene.from_dict(free), check_convexity=False).P_bar_h
+    scene = Scene.from_dict({**free, "load": {"axial": 1.3 * limit}})
+    r = solve(scene, "global")
+    en = Discrete(scene, float(np.max(np.abs(r.w))))
+    x = en.from_nodal(r.w, r.slope)
+    assert _distinct(en, _newton(en, -x), x)
+    assert not _distinct(en, _newton(en, x * (1 + 1e-3)), x)
+
+
 def test_a_node_program_stopped_short_is_split_not_closed():
     """P1 at 3 P_bar_h on a unilateral bed, 256 elements (k = 2): one fast-path node's
     line search stalled at a box corner, its value 815 above its (valid, loose) bound.
