@@ -199,6 +199,47 @@ def test_fast_node_values_gradients_and_hessians_agree_with_the_dense_programs(s
         assert np.all(a.s >= lo) and np.all(a.s <= hi)
 
 
+@pytest.mark.parametrize("supports, axial, k", [("P1", 1.1e10, 2), ("P4", 3.2e10, 5)])
+def test_slices_by_the_whole_bordered_system_agree_with_the_dense_programs(supports, axial, k):
+    """The fallback of a slice whose Schur complement fails (`_bordered_step`, sparse
+    LU of the whole bordered system): the same values, gradients and Hessians."""
+    dp, m, fast, dense = _programs(supports, axial, 16, q=-5e7)
+    fast.bordered = True
+    rng = np.random.default_rng(2)
+    for _ in range(3):
+        s = rng.uniform(-2, 2, size=k)
+        F1, g1, H1, u1, ok1 = fast.reduced_hessian(s)
+        F0, g0, u0, ok0 = dense.reduced(s)
+        assert ok0 and ok1
+        assert F1 == pytest.approx(F0, rel=1e-9, abs=1e-9)
+        assert np.allclose(g1, g0, rtol=1e-6, atol=1e-6 * np.max(np.abs(g0)))
+        h = 1e-4
+        Hd = np.column_stack([(dense.reduced(s + h * e)[1] - dense.reduced(s - h * e)[1]) / (2 * h)
+                              for e in np.eye(k)])
+        assert np.allclose(H1, Hd, rtol=1e-4, atol=1e-4 * np.max(np.abs(Hd)))
+
+
+def test_slices_just_above_the_limit_on_a_fine_mesh_converge():
+    """A helper's campaign (seed 9301, B2): P4 on a unilateral bed 3e-5 above the
+    limit, 300 elements.  Every slice failed: the Hessian is nearly singular along
+    the mode, and the Schur complement's step ``r0 - X nu`` (|r0| 1e11 times the
+    step) cancelled to round-off; the answer was `inaccurate` at the node limit
+    (4000 nodes, 72 s).  The slices fall back on the whole bordered system, and
+    the answer passes the independent energy's checks (600 elements: 10 s, once
+    124 s and `inaccurate`, is left to the campaign)."""
+    from campaign import Case
+    from nonconvex_campaign_support import run_case
+
+    data = {"beam": {"model": "gao", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                     "half_thickness": 0.1, "width": 1.0, "supports": "P4"},
+            "load": {"q": -1698.5420085720282, "axial": 1168037876.4997735},
+            "mesh": {"elements": 300},
+            "foundation": {"gap": 0.00015434084672528642, "stiffness": 16842158490.354544}}
+    rec = run_case(Case(data, ("P4", "foundation", "near-limit"), "B2"), starts=4, seed=2)
+    assert rec["status"] == "optimal" and not rec["violations"], rec
+    assert rec["search_reached"]
+
+
 def test_box_qp_is_exact_against_a_grid():
     from gaocvx.nonconvex.fast import box_qp
 

@@ -42,6 +42,7 @@ import math
 
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from ..mixed import MixedForm
 from .polish import to_mixed
@@ -84,6 +85,7 @@ class FastProgram:
         self.solves = 0
         self._z = np.zeros(mf.n)
         self._s = None  # the last node's minimiser: the next node's start
+        self.bordered = False  # slices by the whole bordered system (_bordered_step)
 
     def energy(self, u) -> float:
         """The energy of free Hermite DOFs ``u`` in the mixed form (non-dimensional)."""
@@ -99,14 +101,17 @@ class FastProgram:
         for it in range(max_iter):
             g = mf.gradient(z)
             H = mf.hessian(z)
-            factor = mf.kkt_factor(H)
-            # (the Newton right-hand side and B's k rows in one banded solve)
-            R, _ = factor.solve(np.column_stack([-g, B.T]),
-                                np.column_stack([-mf.link(z), np.zeros((mf.N, self.k))]))
-            r0, X = R[:, 0], R[:, 1:]
-            S = B @ X
-            nu = np.linalg.solve(S, B @ r0 - (s - B @ z))
-            d = r0 - X @ nu
+            if self.bordered:
+                d, nu, S = self._bordered_step(H, g, mf.link(z), s - B @ z)
+            else:
+                factor = mf.kkt_factor(H)
+                # (the Newton right-hand side and B's k rows in one banded solve)
+                R, _ = factor.solve(np.column_stack([-g, B.T]),
+                                    np.column_stack([-mf.link(z), np.zeros((mf.N, self.k))]))
+                r0, X = R[:, 0], R[:, 1:]
+                S = B @ X
+                nu = np.linalg.solve(S, B @ r0 - (s - B @ z))
+                d = r0 - X @ nu
             feasible = np.linalg.norm(B @ z - s) <= 1e-12 * (1 + np.linalg.norm(s)) and \
                 np.linalg.norm(mf.link(z)) <= 1e-12 * (1 + np.linalg.norm(z))
             dec = float(d @ (H @ d))
@@ -145,6 +150,37 @@ class FastProgram:
             previous = abs(dec)
         return z, nu, S, ok
 
+    def _bordered_step(self, H, g, link, r):
+        """The slice's Newton step ``d``, ``nu`` and ``S`` from the whole bordered
+        system ``[[H, C', B'], [C, 0, 0], [B, 0, 0]]`` by sparse LU.
+
+        The Schur complement needs ``H^-1``, and just above the limit H is nearly
+        singular along the mode: ``d = r0 - X nu`` then cancels all but round-off
+        (P4 on a bed 3e-5 above the limit, 300 elements: ``|r0|`` 1e11 times
+        ``|d|``, and no slice converged).  The bordered matrix is regular there
+        (H is definite on the slice).  Its last k columns give ``S`` as
+        ``-inv(Y)``, Y the multipliers' block of the solve with right-hand side
+        ``(0, 0, I)``.
+        """
+        mf, B, k, st = self.mf, self.B, self.k, self.mf.structure
+        A = _band_csc(H.band(), st.lo, st.up)
+        m = A.shape[0]
+        Bp = np.zeros((k, m))
+        Bp[:, :mf.n] = B
+        Bp = sp.csc_matrix(Bp[:, st.order])
+        M = sp.bmat([[A, Bp.T], [Bp, None]], format="csc")
+        rhs = np.zeros((m + k, 1 + k))
+        rhs[:m, 0] = np.concatenate([-g, -link])[st.order]
+        rhs[m:, 0] = r
+        rhs[m:, 1:] = np.eye(k)
+        try:
+            x = spla.splu(M).solve(rhs)
+        except RuntimeError as exc:   # (SuperLU: "Factor is exactly singular")
+            raise np.linalg.LinAlgError(str(exc)) from exc
+        d = np.empty(m)
+        d[st.order] = x[:m, 0]
+        return d[:mf.n], x[m:, 0], -np.linalg.inv(x[m:, 1:])
+
     def reduced(self, s0):
         """``F(s0)``, its gradient ``-nu``, the free Hermite DOFs and convergence."""
         F, dF, _, u, ok = self.reduced_hessian(s0)
@@ -168,6 +204,11 @@ class FastProgram:
         z, nu, S, ok = self._slice(s0, start)
         if not np.all(np.isfinite(z)):
             z, nu, S, ok = self._slice(s0, np.zeros(self.mf.n))
+        if not ok and not self.bordered:
+            # (the Schur complement's round-off, :meth:`_bordered_step`: the whole
+            # bordered system from now on)
+            self.bordered = True
+            z, nu, S, ok = self._slice(s0, start)
         self._z = z
         F = sum(self.mf.energy_parts(z).values())
         try:
@@ -239,6 +280,15 @@ class FastProgram:
         # the slice solves' own accuracy (Newton to round-off, ~1e-16 of the energy)
         lower -= SLICE_ACCURACY * max(abs(value), 1.0)
         return NodeSolution(lower, value, s, u, None, ok, "optimal" if ok else "inaccurate")
+
+
+def _band_csc(ab, lo: int, up: int) -> sp.csc_matrix:
+    """The matrix of LAPACK gbtrf band storage ``ab`` (``A[i, j] = ab[lo + up + i - j, j]``)."""
+    n = ab.shape[1]
+    rows, cols = np.indices(ab.shape)
+    i = rows - lo - up + cols
+    keep = (rows >= lo) & (i >= 0) & (i < n) & (ab != 0)
+    return sp.csc_matrix((ab[keep], (i[keep], cols[keep])), shape=(n, n))
 
 
 def box_qp(H, g, a, b) -> np.ndarray:
