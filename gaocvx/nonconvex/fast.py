@@ -7,7 +7,9 @@ constraints ``C z = 0`` and the k constraints ``B z = s``
 the energy is strictly convex (the unstable directions are fixed), so damped
 Newton converges from anywhere on it.  Each step solves the banded KKT system
 of :class:`gaocvx.mixed.MixedForm` (LU, so the Hessian need not be definite
-off the slice) bordered by the k rows of ``B`` (a Schur complement of size k).
+off the slice) bordered by the k rows of ``B`` (a Schur complement of size k;
+once a slice fails, the whole bordered system by sparse LU: just above the
+limit the Schur complement cancels to round-off).
 The envelope theorem gives ``dF/ds = -nu``, the multipliers of ``B z = s``.
 
 Differentiating the slice's optimality conditions gives its Hessian too,
