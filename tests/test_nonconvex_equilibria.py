@@ -356,6 +356,41 @@ def test_a_list_without_a_stable_equilibrium_is_inaccurate(monkeypatch):
     assert all(e.status == "inaccurate" for e in eqs)
 
 
+def test_two_minima_without_an_unstable_equilibrium_between_them_are_inaccurate(monkeypatch):
+    """Between two strict minima of the coercive energy lies an unstable equilibrium
+    (mountain pass): a list of minima only is missing one or has a stability wrong.
+    Without load above the limit the list is the two mirror minima and the flat
+    beam between them, unstable; with every zero's probes made to rise (all
+    labelled stable), no entry may stay `optimal`."""
+    import gaocvx.nonconvex.stationary as st
+
+    scene = Scene.from_dict({**scene_dict("P1", elements=8), "load": {"axial": 7.0e9}})  # 1.5 P_bar_h
+    eqs = equilibria(scene)
+    assert sum(e.stable for e in eqs) == 2 and sum(not e.stable for e in eqs) == 1
+    assert all(e.status == "optimal" for e in eqs)
+    monkeypatch.setattr(st, "_classify", lambda dF, r, h: (True, 1.0))
+    eqs = equilibria(scene)
+    assert len(eqs) == 3 and all(e.stable for e in eqs)
+    assert all(e.status == "inaccurate" for e in eqs)
+
+
+def test_a_saddle_near_the_flat_beam_missed_leaves_the_list_inaccurate():
+    """A helper's campaign (seed 9501): P1 pressed at gap 0, two modes, 9 elements.
+    The buckled beam and the flat one are strict minima; the saddle between them,
+    7.2e-6 m high (0.76 J, an equilibrium of the independent energy), was missed:
+    its reduced gradient lies below the contact slices' accuracy, relative to its
+    own energy (2e-9 of the scene's).  The list was all `optimal` and is now
+    `inaccurate`, unless an unstable equilibrium is listed."""
+    data = {"beam": {"model": "gao", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                     "half_thickness": 0.1, "width": 1.0, "supports": "P1"},
+            "load": {"q": -530468.9759248127, "axial": 10028377450.572094},
+            "mesh": {"elements": 9}, "obstacle": {"gap": 0.0}}
+    eqs = equilibria(Scene.from_dict(data))
+    assert sum(e.stable for e in eqs) >= 2
+    assert any(not e.stable for e in eqs) or all(e.status == "inaccurate" for e in eqs), \
+        [(e.energy, e.stable, e.status) for e in eqs]
+
+
 @pytest.mark.parametrize("bed", [False, True])
 def test_at_the_limit_without_load_no_unstable_list_is_optimal(bed):
     """At P_bar_h (to 1e-12) without load the flat beam is a quartic minimum and the

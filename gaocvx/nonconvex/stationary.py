@@ -52,7 +52,7 @@ from ..errors import SceneError, SolverError
 from ..scene import check_solve_arguments, numbers_of, whole
 from .bounds import check_bounded, equilibrium_box, estimate_boxes, zoom_boxes
 from .contours import sampled_roots
-from .equilibrium import Equilibrium, check_has_minimum
+from .equilibrium import Equilibrium, check_has_minimum, check_mountain_pass
 from .obstacle_checks import check_contact, exact_flat, global_minimisers
 
 __all__ = ["Equilibrium", "equilibria", "GRID", "MAX_GRID"]
@@ -221,6 +221,7 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
             parts = dp.energy_parts(dp.from_physical(e.w, e.slope))
             e.energy_scale = float(sum(abs(v) for v in parts.values()) * dp.E0)
         check_has_minimum(out)
+        check_mountain_pass(out)
         return out
     # A zero of F' whose slice failed, or no equilibrium at all (the global
     # minimiser is always one): the list would be wrong without saying so.  A
