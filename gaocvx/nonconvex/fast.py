@@ -94,26 +94,36 @@ class FastProgram:
         return sum(self.mf.energy_parts(to_mixed(self.mf, u)).values())
 
     def _slice(self, s, z, max_iter=60):
-        """Damped Newton on the slice ``B z = s``; returns ``z``, ``nu``, ``S`` and convergence."""
+        """Damped Newton on the slice ``B z = s``; returns ``z``, ``nu``, ``F''`` and convergence.
+
+        ``F'' = S^-1`` (the Schur complement's inverse), or ``-Y`` from the
+        whole bordered system (:meth:`_bordered_step`); a singular system ends
+        the slice unconverged (the caller then tries the bordered one).
+        """
         mf, B = self.mf, self.B
         ok = False
         nu = np.zeros(self.k)
-        S = np.eye(self.k)
+        hess = np.full((self.k, self.k), np.nan)
         previous = math.inf
         for it in range(max_iter):
             g = mf.gradient(z)
             H = mf.hessian(z)
-            if self.bordered:
-                d, nu, S = self._bordered_step(H, g, mf.link(z), s - B @ z)
-            else:
-                factor = mf.kkt_factor(H)
-                # (the Newton right-hand side and B's k rows in one banded solve)
-                R, _ = factor.solve(np.column_stack([-g, B.T]),
-                                    np.column_stack([-mf.link(z), np.zeros((mf.N, self.k))]))
-                r0, X = R[:, 0], R[:, 1:]
-                S = B @ X
-                nu = np.linalg.solve(S, B @ r0 - (s - B @ z))
-                d = r0 - X @ nu
+            try:
+                if self.bordered:
+                    d, nu, Y = self._bordered_step(H, g, mf.link(z), s - B @ z)
+                    hess = -Y
+                else:
+                    factor = mf.kkt_factor(H)
+                    # (the Newton right-hand side and B's k rows in one banded solve)
+                    R, _ = factor.solve(np.column_stack([-g, B.T]),
+                                        np.column_stack([-mf.link(z), np.zeros((mf.N, self.k))]))
+                    r0, X = R[:, 0], R[:, 1:]
+                    S = B @ X
+                    nu = np.linalg.solve(S, B @ r0 - (s - B @ z))
+                    d = r0 - X @ nu
+                    hess = np.linalg.inv(S)
+            except np.linalg.LinAlgError:
+                return z, nu, np.full((self.k, self.k), np.nan), False
             feasible = np.linalg.norm(B @ z - s) <= 1e-12 * (1 + np.linalg.norm(s)) and \
                 np.linalg.norm(mf.link(z)) <= 1e-12 * (1 + np.linalg.norm(z))
             dec = float(d @ (H @ d))
@@ -150,19 +160,37 @@ class FastProgram:
                 ok = True
                 break
             previous = abs(dec)
-        return z, nu, S, ok
+        return z, nu, hess, ok
 
     def _bordered_step(self, H, g, link, r):
-        """The slice's Newton step ``d``, ``nu`` and ``S`` from the whole bordered
-        system ``[[H, C', B'], [C, 0, 0], [B, 0, 0]]`` by sparse LU.
+        """The slice's Newton step from the whole bordered system
+        ``[[H, C', B'], [C, 0, 0], [B, 0, 0]]`` by sparse LU.
 
         The Schur complement needs ``H^-1``, and just above the limit H is nearly
         singular along the mode: ``d = r0 - X nu`` then cancels all but round-off
         (P4 on a bed 3e-5 above the limit, 300 elements: ``|r0|`` 1e11 times
         ``|d|``, and no slice converged).  The bordered matrix is regular there
-        (H is definite on the slice).  Its last k columns give ``S`` as
-        ``-inv(Y)``, Y the multipliers' block of the solve with right-hand side
-        ``(0, 0, I)``.
+        (H is definite on the slice).
+
+        Parameters
+        ----------
+        H : Hessian
+            The mixed energy's Hessian at the slice's current ``z``.
+        g, link : ndarray
+            Its gradient and linking residual there.
+        r : ndarray
+            ``s - B z``, the slice's own residual.
+
+        Returns
+        -------
+        d : ndarray
+            The step in ``z``.
+        nu : ndarray
+            The multipliers of ``B z = s`` after it (``dF/ds = -nu``).
+        Y : ndarray
+            The multipliers' block of the solve with right-hand side ``(0, 0, I)``:
+            ``-S^-1``, so ``F'' = -Y`` without inverting S (nearly singular along the
+            mode just where this is used).
         """
         mf, B, k, st = self.mf, self.B, self.k, self.mf.structure
         A = _band_csc(H.band(), st.lo, st.up)
@@ -181,7 +209,7 @@ class FastProgram:
             raise np.linalg.LinAlgError(str(exc)) from exc
         d = np.empty(m)
         d[st.order] = x[:m, 0]
-        return d[:mf.n], x[m:, 0], -np.linalg.inv(x[m:, 1:])
+        return d[:mf.n], x[m:, 0], x[m:, 1:]
 
     def reduced(self, s0):
         """``F(s0)``, its gradient ``-nu``, the free Hermite DOFs and convergence."""
@@ -203,20 +231,18 @@ class FastProgram:
         # start at w = 0 stalled the node bounds, campaign scene 8:3.)
         zero = not np.any(s0) and not self.mf.has_load
         start = np.zeros(self.mf.n) if zero else self._z.copy()
-        z, nu, S, ok = self._slice(s0, start)
+        z, nu, hess, ok = self._slice(s0, start)
         if not np.all(np.isfinite(z)):
-            z, nu, S, ok = self._slice(s0, np.zeros(self.mf.n))
+            start = np.zeros(self.mf.n)
+            z, nu, hess, ok = self._slice(s0, start)
         if not ok and not self.bordered:
             # (the Schur complement's round-off, :meth:`_bordered_step`: the whole
-            # bordered system from now on)
+            # bordered system from now on; a failure for another reason costs only
+            # time, 1.6 to 6 times a banded slice)
             self.bordered = True
-            z, nu, S, ok = self._slice(s0, start)
+            z, nu, hess, ok = self._slice(s0, start)
         self._z = z
         F = sum(self.mf.energy_parts(z).values())
-        try:
-            hess = np.linalg.inv(S)
-        except np.linalg.LinAlgError:
-            hess = np.full((self.k, self.k), np.nan)
         return float(F), -nu, 0.5 * (hess + hess.T), self.mf.to_hermite(z), ok
 
     def obstacle_multipliers(self):
@@ -285,7 +311,8 @@ class FastProgram:
 
 
 def _band_csc(ab, lo: int, up: int) -> sp.csc_matrix:
-    """The matrix of LAPACK gbtrf band storage ``ab`` (``A[i, j] = ab[lo + up + i - j, j]``)."""
+    """The matrix of LAPACK gbtrf band storage ``ab`` (``A[i, j] = ab[lo + up + i - j, j]``;
+    its first ``lo`` rows are the factorisation's fill-in workspace, not entries)."""
     n = ab.shape[1]
     rows, cols = np.indices(ab.shape)
     i = rows - lo - up + cols
