@@ -190,15 +190,20 @@ def _newton(en, x, steps: int = 5):
     above the limit), which one Newton step reached."""
     if len(en.constraints()[1]):
         return x
+    # (a step is kept only where the gradient falls: from a true second minimiser an
+    # indefinite Hessian's step could jump anywhere, and must not hide it)
+    _, g = en(x)
     for _ in range(steps):
-        _, g = en(x)
         try:
             step = np.linalg.solve(en.hessian(x), -g)
         except np.linalg.LinAlgError:
             break
         if not np.all(np.isfinite(step)):
             break
-        x = x + step
+        _, g2 = en(x + step)
+        if not np.linalg.norm(g2) < np.linalg.norm(g):
+            break
+        x, g = x + step, g2
     return x
 
 

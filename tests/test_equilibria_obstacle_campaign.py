@@ -952,7 +952,8 @@ def test_equilibria_closer_than_the_merging_distance_are_searched_in_their_own_s
     not listed: its contact slices, warm-started from distant ones, stopped on the
     wrong contact set and failed the global method's KKT test; solved once more
     from there (`obstacle_checks.kkt_point`) they pass, and that pair is listed
-    stable and `optimal` as well.  Every listed equilibrium checked."""
+    stable and `optimal` as well.  Every listed equilibrium checked (`_checked`:
+    the energies picked out below are confirmed by the independent check)."""
     from gaocvx import Scene
     scene = Scene.from_dict({
         "beam": {**_BEAM, "supports": "P1"}, "load": {"axial": 15207024486.094387},
