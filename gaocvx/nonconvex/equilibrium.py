@@ -66,11 +66,8 @@ def check_has_minimum(eqs) -> None:
     """
     if any(e.stable for e in eqs):
         return
-    log.warning("equilibria: none of the %d equilibria found is stable, but a global "
-                "minimiser exists and is one: the list misses it or a stability is wrong; "
-                "every entry is reported inaccurate", len(eqs))
-    for e in eqs:
-        e.status = "inaccurate"
+    _all_inaccurate(eqs, f"none of the {len(eqs)} equilibria found is stable, but a global "
+                         "minimiser exists and is one")
 
 
 def check_mountain_pass(eqs) -> None:
@@ -96,9 +93,15 @@ def check_mountain_pass(eqs) -> None:
     if sum(bool(e.stable) and e.status == "optimal" for e in eqs) < 2 \
             or any(not e.stable for e in eqs):
         return
-    log.warning("equilibria: %d stable equilibria and no unstable one, but an unstable "
-                "equilibrium lies between two minima (mountain pass): the list misses it or "
-                "a stability is wrong; every entry is reported inaccurate", len(eqs))
+    _all_inaccurate(eqs, f"{len(eqs)} stable equilibria and no unstable one, but an unstable "
+                         "equilibrium lies between two minima (mountain pass)")
+
+
+def _all_inaccurate(eqs, why: str) -> None:
+    """Every entry of a list that is wrong somewhere becomes ``inaccurate``, with a
+    warning that says ``why``."""
+    log.warning("equilibria: %s: the list misses it or a stability is wrong; every entry "
+                "is reported inaccurate", why)
     for e in eqs:
         e.status = "inaccurate"
 
