@@ -145,14 +145,18 @@ class Equilibrium:
         equilibrium [program units]: ``F''`` with one mode, with two the least
         Hessian eigenvalue or one-sided directional curvature (on a kink of F
         through a zero the least one-sided one); NaN at an edge of the
-        admissible amplitudes, or where the certified global minimiser's
-        label replaced the probes'.
+        admissible amplitudes, where the certified global minimiser's
+        label replaced the probes', or for an equilibrium polished on the
+        whole beam (its label from the second-order conditions).
     W : float
         The deflection scale [m] of the amplitudes (see :attr:`amplitude_m`).
     energy_scale : float
         The sum of the magnitudes of its energy's parts [J] (bending, Gao,
         axial, load, contact): the scale of the energy's round-off (NaN where
         not computed).
+    whole_beam : bool
+        Polished and certified on the whole beam, in its own scale
+        (:mod:`.whole_beam`), not through a slice of the reduced function.
     """
 
     energy: float
@@ -167,6 +171,7 @@ class Equilibrium:
     curvature: float = field(default=math.nan)
     W: float = field(default=math.nan)
     energy_scale: float = field(default=math.nan)
+    whole_beam: bool = False
 
     @property
     def amplitude_m(self) -> list:

@@ -1,0 +1,109 @@
+"""The whole-beam polish of an equilibrium with an obstacle (gaocvx.nonconvex.whole_beam).
+
+Small problems whose equilibria and stability are known by hand (a quadratic
+energy with one row held), then the saddle near the flat beam of a helper's
+campaign scene, polished from a slice's beam perturbed by hand.
+"""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from gaocvx.nonconvex.whole_beam import MOVE, polish_equilibrium
+
+
+def _quadratic(H, f):
+    """Energy u'Hu/2 - f'u on DOFs that are all deflections, no modes."""
+    H, f = np.asarray(H, float), np.asarray(f, float)
+    n = len(f)
+    dp = SimpleNamespace(gradient=lambda u: H @ u - f, hessian=lambda u: sp.csr_matrix(H),
+                         energy=lambda u: 0.5 * u @ H @ u - f @ u,
+                         _w_rows=lambda: np.arange(n), G=sp.eye(n),
+                         to_physical=lambda u: (u.copy(), 0 * u), x=np.zeros(n), E0=1.0,
+                         P=0.0, W=1.0)
+    return dp, SimpleNamespace(phi=np.zeros((n, 1)), c=np.zeros(1))
+
+
+ROW = sp.csr_matrix([[1.0, 0.0]])    # u_1 >= 0
+
+
+def test_pressed_and_stable():
+    # min |u|^2/2 + u_1 - u_2 over u_1 >= 0: (0, 1), multiplier 1
+    dp, modes = _quadratic(np.eye(2), [-1.0, 1.0])
+    e = polish_equilibrium(dp, modes, np.array([1e-12, 1.0 - 1e-7]), ROW, np.zeros(1))
+    assert e is not None and e.stable and e.status == "optimal" and e.whole_beam
+    np.testing.assert_allclose(e.w, [0.0, 1.0], atol=1e-15)
+    assert e.energy == pytest.approx(-0.5, rel=1e-15)
+
+
+def test_pressed_with_a_falling_free_direction_is_unstable():
+    # H = diag(1, -1), f = (-1, 1): u_2 free with negative curvature; (0, -1) is
+    # an equilibrium (gradient (1, 0) = the row's force), a maximum along u_2
+    dp, _ = _quadratic(np.diag([1.0, -1.0]), [-1.0, 1.0])
+    # (the certificate's metric H + 4 c phi phi' needs the unstable direction as a mode)
+    modes = SimpleNamespace(phi=np.array([[0.0], [1.0]]), c=np.array([1.0]))
+    e = polish_equilibrium(dp, modes, np.array([0.0, -1.0 + 1e-8]), ROW, np.zeros(1))
+    assert e is not None and not e.stable and e.status == "optimal"
+    np.testing.assert_allclose(e.w, [0.0, -1.0], atol=1e-15)
+
+
+def test_a_row_pulling_is_no_equilibrium():
+    # f = (+1, 1): the minimum is off the row (u_1 = 1); held at u_1 = 0 the row
+    # would pull (multiplier -1): the certificate fails, nothing is returned
+    dp, modes = _quadratic(np.eye(2), [1.0, 1.0])
+    assert polish_equilibrium(dp, modes, np.array([0.0, 1.0]), ROW, np.zeros(1)) is None
+
+
+def test_a_weakly_active_row_leaves_the_stability_undecided():
+    # f = (0, 1): the minimum (0, 1) touches the row with multiplier 0 (degenerate)
+    dp, modes = _quadratic(np.eye(2), [0.0, 1.0])
+    assert polish_equilibrium(dp, modes, np.array([0.0, 1.0 + 1e-9]), ROW, np.zeros(1)) is None
+
+
+def test_a_start_far_from_the_equilibrium_gives_nothing():
+    dp, modes = _quadratic(np.eye(2), [-1.0, 1.0])
+    assert polish_equilibrium(dp, modes, np.array([0.0, 1.0 + 10 * MOVE]), ROW,
+                              np.zeros(1)) is None
+
+
+def test_the_flat_beam_is_left_to_its_own_check():
+    dp, modes = _quadratic(np.eye(2), [-1.0, 0.0])
+    assert polish_equilibrium(dp, modes, np.zeros(2), ROW, np.zeros(1)) is None
+
+
+SADDLE_SCENE = {"beam": {"model": "gao", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                         "half_thickness": 0.1, "width": 1.0, "supports": "P1"},
+                "load": {"q": -530468.9759248127, "axial": 10028377450.572094},
+                "mesh": {"elements": 9}, "obstacle": {"gap": 0.0}}
+
+
+def test_the_saddle_near_the_flat_beam_from_a_perturbed_slice():
+    """A helper's campaign scene (seed 9501): its saddle 7.2e-6 m high at 0.76 J
+    (the helper's independent Newton step: 0.7634551778770783 J).  From the
+    slice's beam scaled by 1 + 1e-5 (below MOVE, above the slices' own error)
+    the polish returns it, unstable; from 1 + 1e-2, nothing."""
+    from gaocvx import Scene
+    from gaocvx.discrete import DiscreteProblem
+    from gaocvx.nonconvex.fast_contact import FastContactProgram
+    from gaocvx.nonconvex.minimum import rescale_for, scene_energy
+    from gaocvx.nonconvex.modes import unstable_modes
+    from gaocvx.nonconvex.node import obstacle_rows
+    from gaocvx.nonconvex.slices import ContactSlices
+
+    dp = DiscreteProblem(Scene.from_dict(SADDLE_SCENE), check_convexity=False)
+    modes = unstable_modes(dp)
+    dp = rescale_for(dp, modes)
+    prog = ContactSlices(FastContactProgram(dp, modes), scene_energy(dp, modes))
+    rows, levels = obstacle_rows(dp)
+    # (the saddle lies on the line s_2 = 0 at s_1 = 8.3026e-5, where the slice's
+    # F' changes sign)
+    _, _, u, ok = prog.reduced(np.array([8.3026e-5, 0.0]))
+    assert ok
+    e = polish_equilibrium(dp, modes, u * (1 + 1e-5), rows, levels)
+    assert e is not None and not e.stable and e.status == "optimal"
+    assert e.energy == pytest.approx(0.7634551778770783, rel=1e-9)
+    assert polish_equilibrium(dp, modes, u * (1 + 1e-2), rows, levels) is None
