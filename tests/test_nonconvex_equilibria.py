@@ -374,21 +374,42 @@ def test_two_minima_without_an_unstable_equilibrium_between_them_are_inaccurate(
     assert all(e.status == "inaccurate" for e in eqs)
 
 
-def test_a_saddle_near_the_flat_beam_missed_leaves_the_list_inaccurate():
+def test_a_saddle_near_the_flat_beam_is_listed_polished_on_the_whole_beam():
     """A helper's campaign (seed 9501): P1 pressed at gap 0, two modes, 9 elements.
     The buckled beam and the flat one are strict minima; the saddle between them,
-    7.2e-6 m high (0.76 J, an equilibrium of the independent energy), was missed:
-    its reduced gradient lies below the contact slices' accuracy, relative to its
-    own energy (2e-9 of the scene's).  The list was all `optimal` and is now
-    `inaccurate`, unless an unstable equilibrium is listed."""
+    7.2e-6 m high (0.76 J), was missed: its reduced gradient lies below the
+    contact slices' accuracy relative to its own energy (2e-9 of the scene's), and
+    the list of two minima was then all `inaccurate` (mountain pass).  The zero,
+    polished on the whole beam and certified in its own scale, is listed:
+    independently a KKT point of the stated stability, and stationary in its own
+    K-norm (no floor of the scene's), with the energy the helper's independent
+    Newton step gave (0.7634551778770783 J)."""
+    from nonconvex_independent import Discrete
+    from test_equilibria_obstacle_campaign import _checked
     data = {"beam": {"model": "gao", "length": 1.0, "E": 2.1e11, "nu": 0.3,
                      "half_thickness": 0.1, "width": 1.0, "supports": "P1"},
             "load": {"q": -530468.9759248127, "axial": 10028377450.572094},
             "mesh": {"elements": 9}, "obstacle": {"gap": 0.0}}
-    eqs = equilibria(Scene.from_dict(data))
-    assert sum(e.stable for e in eqs) >= 2
-    assert any(not e.stable for e in eqs) or all(e.status == "inaccurate" for e in eqs), \
-        [(e.energy, e.stable, e.status) for e in eqs]
+    scene = Scene.from_dict(data)
+    eqs = equilibria(scene)
+    assert [e.stable for e in eqs] == [True, True, False]
+    assert all(e.status == "optimal" for e in eqs)
+    saddle = eqs[-1]
+    assert saddle.energy == pytest.approx(0.7634551778770783, rel=1e-9)
+    top = float(np.max(np.abs(saddle.w)))
+    assert 5e-6 < top < 1e-5
+    _checked(scene, eqs)
+    # stationary in its own scale: the Lagrangian's gradient in the K^-1 norm,
+    # relative to the saddle's own K-norm
+    en = Discrete(scene, top)
+    x = en.from_nodal(saddle.w, saddle.slope)
+    out = en.kkt(x)
+    _, g0 = en(np.zeros(en.n))
+    norm = en.norm_K(x)
+    floor = 1e-6 * float(np.linalg.norm(np.linalg.solve(np.linalg.cholesky(en.stiffness()), g0)))
+    assert norm > floor          # (so kkt's stationarity is relative to the saddle's norm)
+    assert out["stationarity"] <= 1e-9 and out["feasibility"] <= 1e-12
+    assert out["touching"] >= 1
 
 
 @pytest.mark.parametrize("bed", [False, True])

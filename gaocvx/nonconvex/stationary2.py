@@ -46,7 +46,9 @@ every zero is found, so this search is a careful sampling, not a proof:
 5. with an obstacle, the mirror images (x -> L - x) of the equilibria found,
    where mesh and supports are symmetric, seed steps 2 and 4 again, and every
    equilibrium called ``optimal`` must pass the global method's optimality
-   conditions (:func:`.obstacle_checks.check_contact`), else it is ``inaccurate``;
+   conditions (:func:`.obstacle_checks.check_contact`), else it is ``inaccurate``
+   unless polished on the whole beam (:mod:`.whole_beam`, as are zeros of step 3
+   resolved to the scene's accuracy but not to their own: near the flat beam);
    one at the certified global minimiser's amplitudes is stable, and the
    certified minimiser is listed itself where no `optimal` stable entry as low is
    that close (:func:`.obstacle_checks.at_global`);
@@ -89,6 +91,7 @@ from .equilibrium import Equilibrium, same_point
 from .obstacle_checks import at_global, check_contact, exact_flat
 from .probes import curvature as _curvature, least_rise as _least_rise
 from .stationary import ROOT_TOL
+from .whole_beam import polisher
 
 __all__ = ["find_plane", "GRID2"]
 
@@ -149,6 +152,12 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
                 return None
         return 0.5 * (H + H.T)
 
+    # (zeros resolved to the scene's accuracy but not to their own: the whole beam)
+    polish = polisher(dp, modes)
+
+    def at_roots(roots, *args, **kwargs):
+        return _at_roots(dp, grad, hessian, roots, *args, floor=floor, polish=polish, **kwargs)
+
     if box is None:
         box = (getattr(prog, "smin", [-S, -S]), getattr(prog, "smax", [S, S]))
     lo = np.maximum(-S, np.asarray(box[0], float))
@@ -171,7 +180,7 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
         # zeros in narrow valleys, where Newton's method does not converge from
         # a grid cell (:mod:`.contours`)
         ends += [z for axes in grids for z in curve_zeros(grad, axes, S)]
-    out = _at_roots(dp, grad, hessian, ends, S)
+    out = at_roots(ends, S)
     # down both sides of every saddle's falling direction: a minimum next to a
     # saddle, in the same grid cell, is where that path ends
     # (only zeros to the tolerance: a descent's end at a kink of F is left to the
@@ -182,7 +191,7 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
     # listed the same equilibria without it, in 28 % less time)
     kinks = dp.contact == "obstacle" or (dp.contact == "foundation" and not dp.bilateral)
     descents = _descents(grad, hessian, out, S, follow=kinks)
-    ends = _at_roots(dp, grad, hessian, _newton(grad, hessian, descents, S), S,
+    ends = at_roots(_newton(grad, hessian, descents, S), S,
                      [e.amplitudes for e in out], strict=True)
     out += ends
     # and the saddle between such a minimum and its nearest neighbour: two strict
@@ -190,7 +199,7 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
     # as hard to find as the minimum was
     passes = _passes(grad, [e.amplitudes for e in ends if e.stable],
                      [e.amplitudes for e in out if e.stable], S)
-    out += _at_roots(dp, grad, hessian, _newton(grad, hessian, passes, S), S,
+    out += at_roots(_newton(grad, hessian, passes, S), S,
                      [e.amplitudes for e in out], strict=True)
     if dp.contact == "obstacle":
         def found():
@@ -215,9 +224,9 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
         # resting on it just off the middle was found, its image was not)
         images = mirror.seeds(dp, modes, grad, out, S) if modes is not None else []
         if images:
-            out += _at_roots(dp, grad, hessian, _newton(grad, hessian, images, S), S, found())
+            out += at_roots(_newton(grad, hessian, images, S), S, found())
             out += _edge_minima(dp, grad, None, S, found(), floor, images)
-        check_contact(dp, prog, out)
+        check_contact(dp, prog, out, polish)
         at_global(dp, prog, out, minimisers, lambda s: grad(np.asarray(s, float))[0], S)
         if modes is not None:
             def classify(s):
@@ -239,8 +248,8 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
             # an entry that failed the check beside the exact mirror image of one
             # that passed it is that image (:mod:`.images`)
             def settle(s):
-                new = _at_roots(dp, grad, hessian, [s], S, strict=True)
-                check_contact(dp, prog, new)
+                new = at_roots([s], S, strict=True)
+                check_contact(dp, prog, new, polish)
                 return new[0] if new and new[0].status == "optimal" else None
             out = mirror.settle_twins(dp, modes, grad, out, S, settle)
             # (Newton's end is dropped where F is infinite there: no end, no image)
@@ -282,10 +291,16 @@ def _newton(grad, hessian, seeds, S) -> list:
     return ends
 
 
-def _at_roots(dp, grad, hessian, roots, S, known=(), strict=False) -> list:
+def _at_roots(dp, grad, hessian, roots, S, known=(), strict=False, floor=0.0,
+              polish=None) -> list:
     """The equilibria at Newton's end points that are zeros of ``∇F`` (step 3),
     merged when closer than 1e-6 S (to each other or to ``known`` amplitudes);
     ``strict``: only those within the residual's tolerance.
+
+    A zero to the scene's accuracy (the residual relative to ``floor``, the
+    scene's energy) but not to its own is, with ``polish`` (an obstacle:
+    :func:`.whole_beam.polish_equilibrium` on the slice's beam), polished on
+    the whole beam and listed as that returns it, if it does.
 
     (End points where Newton did not converge, at a kink of F, are left to the
     edge minima: they once also kept the edge minima from reporting a beam
@@ -297,7 +312,15 @@ def _at_roots(dp, grad, hessian, roots, S, known=(), strict=False) -> list:
             continue
         F, d, u, ok = grad(r)
         size = sum(abs(v) for v in dp.energy_parts(u).values()) or 1.0
-        res = float(np.linalg.norm(d)) * max(float(np.linalg.norm(r)), 1e-3 * S) / size
+        work = float(np.linalg.norm(d)) * max(float(np.linalg.norm(r)), 1e-3 * S)
+        res = work / size
+        if res > ROOT_TOL and polish is not None and ok and work <= ROOT_TOL * max(size, floor):
+            e = polish(u)
+            if e is not None:
+                if not any(same_point(e.amplitudes, h, S) for h in have):
+                    have.append(np.asarray(e.amplitudes, float))
+                    out.append(e)
+                continue
         if res > (ROOT_TOL if strict else 1e3 * ROOT_TOL):  # Newton did not converge
             continue
         H = hessian(r)
