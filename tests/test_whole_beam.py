@@ -22,7 +22,7 @@ def _quadratic(H, f):
     n = len(f)
     dp = SimpleNamespace(gradient=lambda u: H @ u - f, hessian=lambda u: sp.csr_matrix(H),
                          energy=lambda u: 0.5 * u @ H @ u - f @ u,
-                         _w_rows=lambda: np.arange(n), G=sp.eye(n),
+                         _w_rows=lambda: np.arange(n), G=sp.eye(n), K=sp.eye(n),
                          to_physical=lambda u: (u.copy(), 0 * u), x=np.zeros(n), E0=1.0,
                          P=0.0, W=1.0)
     return dp, SimpleNamespace(phi=np.zeros((n, 1)), c=np.zeros(1))
@@ -53,15 +53,27 @@ def test_pressed_with_a_falling_free_direction_is_unstable():
 
 def test_a_row_pulling_is_no_equilibrium():
     # f = (+1, 1): the minimum is off the row (u_1 = 1); held at u_1 = 0 the row
-    # would pull (multiplier -1): the certificate fails, nothing is returned
+    # would pull (multiplier -1): it is let go, and the equilibrium Newton's method
+    # then finds, the free minimum (1, 1), is not the start's: nothing is returned
     dp, modes = _quadratic(np.eye(2), [1.0, 1.0])
     assert polish_equilibrium(dp, modes, np.array([0.0, 1.0]), ROW, np.zeros(1)) is None
 
 
 def test_a_weakly_active_row_leaves_the_stability_undecided():
-    # f = (0, 1): the minimum (0, 1) touches the row with multiplier 0 (degenerate)
-    dp, modes = _quadratic(np.eye(2), [0.0, 1.0])
+    # H = diag(-1, 1), f = (0, 1): (0, 1) touches the row with multiplier 0
+    # (degenerate); the energy falls along d = (1, 0), admissible one way only, and
+    # rises on the row's null space: neither second-order test decides
+    dp, _ = _quadratic(np.diag([-1.0, 1.0]), [0.0, 1.0])
+    modes = SimpleNamespace(phi=np.array([[1.0], [0.0]]), c=np.array([1.0]))
     assert polish_equilibrium(dp, modes, np.array([0.0, 1.0 + 1e-9]), ROW, np.zeros(1)) is None
+
+
+def test_a_weakly_active_row_over_a_convex_energy_is_a_minimum():
+    # f = (0, 1), H = I: (0, 1) touches the row with multiplier 0, and the energy
+    # is strictly convex: a strict local minimum whatever the row does
+    dp, modes = _quadratic(np.eye(2), [0.0, 1.0])
+    e = polish_equilibrium(dp, modes, np.array([0.0, 1.0 + 1e-9]), ROW, np.zeros(1))
+    assert e is not None and e.stable
 
 
 def test_a_start_far_from_the_equilibrium_gives_nothing():

@@ -6,26 +6,37 @@ scene's energy.  An equilibrium whose own energy is far smaller is then found
 but not resolved: a saddle 7.2e-6 m from the flat beam at gap 0 (P1, two
 modes, 9 elements; 0.76 J against the scene's 3.6e8 J) had ``|∇F| |s|`` 6e-4
 of its own energy's parts after Newton's method on ``∇F``, and was dropped,
-although the slice's beam was that equilibrium to 5e-11.
+although the slice's beam was that equilibrium to 5e-5.
 
-Here the slice's beam ``u`` is taken as the start of Newton's method on the
-optimality conditions of the full energy with the touching rows as equalities
+Here the slice's beam ``u`` starts an active-set Newton method on the
+optimality conditions of the full energy
 
     ∇Π(u) = A_actᵀ λ,    A_act u = levels_act,
 
-(the rows touching within ``TOUCH_TOL`` of ``u``'s own size; the systems solved
-in the least-squares sense, as touching rows of a flat contact are dependent).
-The end is an equilibrium only if it passes the global method's certificate
+the active rows first those touching within ``TOUCH_TOL`` of ``u``'s own size;
+after Newton's method converges, a violated row is added, or else a row
+pulling (negative multiplier) is dropped, and Newton's method runs again.  The
+rows are scaled to unit norm and balanced against the Hessian, and dependent
+rows (a flat contact: a cubic touching at four points of an element) are left
+out by a pivoted QR, so the bordered system is solved exactly by a sparse LU
+(unscaled, a least-squares solve cut the rows' directions away: Gauss rows
+beside a pinned end have norms of 6e-3 against Hessian entries of 1e6, and
+one saddle was listed twice, 2.8e-5 of its energy apart).  The end is an
+equilibrium only if it passes the global method's certificate
 (:func:`.certificate.psi_certificate`: stationarity of the Lagrangian in the
 convex part's metric, feasibility, the multipliers' sign, complementarity)
-*relative to its own size* (no floor), and lies within ``MOVE`` of ``u`` (the
-root found is this equilibrium, not a neighbour's).  Its stability comes from
-the Hessian on the touching rows' null space ``Z``: a negative eigenvalue of
-``Zᵀ H Z`` is a direction, admissible both ways, along which the energy falls
-(unstable); all eigenvalues positive with every touching row's multiplier
-positive is the second-order sufficient condition of a strict local minimum
-(stable); anything else (a weakly active row, an eigenvalue within round-off
-of zero) is undecided, and no answer is given.
+*relative to its own size* (no floor), violates no row beyond round-off, and
+lies within ``MOVE`` of ``u``; callers also ask for its amplitudes to be the
+zero's (within the searches' merging distance).
+
+Its stability comes from the second-order conditions, with eigenvalues
+relative to the bending stiffness ``K`` (generalised, ``Zᵀ H Z v = μ Zᵀ K Z v``:
+relative to the largest they fall as h³, below any threshold beyond 100
+elements): ``μ > EIG_TOL`` on the null space of the rows carrying a force
+(multiplier above ``EIG_TOL`` of the largest) is the sufficient condition of a
+strict local minimum (stable); ``μ < -EIG_TOL`` on the null space of every
+touching row is a direction, admissible both ways, along which the energy
+falls (unstable); anything else is undecided, and no answer is given.
 """
 
 from __future__ import annotations
@@ -35,27 +46,36 @@ import math
 
 import numpy as np
 import scipy.linalg as la
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from ..certificate import passes
 from ..tolerances import TOUCH_TOL
 from .certificate import psi_certificate
-from .equilibrium import Equilibrium
+from .equilibrium import Equilibrium, same_point
 
-__all__ = ["polish_equilibrium", "polisher", "MAX_UNKNOWNS", "MOVE", "EIG_TOL"]
+__all__ = ["polish_equilibrium", "polisher", "settle", "MAX_UNKNOWNS", "MOVE", "EIG_TOL"]
 
 log = logging.getLogger(__name__)
 
-#: Unknowns (DOFs plus touching rows) of the dense systems solved, at most: the
-#: least-squares KKT solve costs their cube (about 0.5 s at 2000).
+#: Free DOFs at most: the stability test's null spaces and eigenvalues are dense
+#: (their cube: about 2 s at 2000).
 MAX_UNKNOWNS = 2000
 #: The polished beam lies within this fraction of its size from the slice's: the
 #: slices are accurate relative to the scene, not to the beam (the saddle above:
 #: 5.3e-5 from the search's warm-started slice, 5e-11 from a slice solved afresh).
 MOVE = 1e-3
-#: Eigenvalues of ``Zᵀ H Z`` (and multipliers) within this fraction of the largest
-#: are taken as zero (round-off of the eigenvalues is about 1e-13 of the largest).
+#: Generalised eigenvalues ``μ`` (relative to ``K``) and multipliers (relative to
+#: the largest) within this of zero are taken as zero.
 EIG_TOL = 1e-8
-MAX_ITER = 20
+#: Newton iterations per active set, and changes of the active set, at most.
+MAX_ITER = 30
+MAX_CHANGES = 10
+#: Newton's steps below this fraction of the beam that no longer halve are round-off.
+STALL = 1e-9
+#: A row whose scaled pivot in the QR of the touching rows is below this is
+#: dependent on the others.
+RANK_TOL = 1e-10
 
 
 def polish_equilibrium(dp, modes, u, rows, levels):
@@ -77,10 +97,12 @@ def polish_equilibrium(dp, modes, u, rows, levels):
     -------
     Equilibrium or None
         ``optimal``, with its stability from the second-order conditions, its
-        residual the certificate's stationarity and its curvature NaN (no
-        reduced function's); None where Newton's method does not converge,
-        moves further than ``MOVE``, the certificate fails or the stability is
-        undecided.
+        residual the certificate's stationarity, its curvature NaN (no reduced
+        function's) and ``whole_beam`` True; None where Newton's method does
+        not converge, moves further than ``MOVE``, the certificate fails, the
+        stability is undecided, or ``u`` is the flat beam (its own check,
+        :func:`.obstacle_checks.exact_flat`) or has more than ``MAX_UNKNOWNS``
+        DOFs.
 
     Examples
     --------
@@ -92,7 +114,8 @@ def polish_equilibrium(dp, modes, u, rows, levels):
     >>> f = np.array([-1.0, 1.0])
     >>> dp = SimpleNamespace(gradient=lambda u: u - f, hessian=lambda u: sp.eye(2),
     ...     energy=lambda u: 0.5 * u @ u - f @ u, _w_rows=lambda: np.arange(2), G=sp.eye(2),
-    ...     to_physical=lambda u: (u, 0 * u), x=np.zeros(2), E0=1.0, P=0.0, W=1.0)
+    ...     K=sp.eye(2), to_physical=lambda u: (u, 0 * u), x=np.zeros(2), E0=1.0, P=0.0,
+    ...     W=1.0)
     >>> modes = SimpleNamespace(phi=np.zeros((2, 1)), c=np.zeros(1))
     >>> e = polish_equilibrium(dp, modes, np.array([0.0, 1.0 + 1e-9]),
     ...                        sp.csr_matrix([[1.0, 0.0]]), np.zeros(1))
@@ -104,42 +127,45 @@ def polish_equilibrium(dp, modes, u, rows, levels):
     size = float(np.max(np.abs(u[dp._w_rows()]), initial=0.0))
     if not (math.isfinite(size) and size > 0.0):
         return None     # (the flat beam itself: obstacle_checks.exact_flat)
-    act = np.flatnonzero(rows @ u - levels <= TOUCH_TOL * size)
-    m = len(act)
-    if n + m > MAX_UNKNOWNS:
+    if n > MAX_UNKNOWNS:
+        log.info("whole-beam polish: %d DOFs, above %d: not tried", n, MAX_UNKNOWNS)
         return None
-    A = rows[act].toarray()
-    x = u.copy()
-    # (the least-squares multipliers of the start: Newton's first step then only
-    # corrects them)
-    mult = la.lstsq(A.T, dp.gradient(x))[0] if m else np.zeros(0)
-    for _ in range(MAX_ITER):
-        g = dp.gradient(x)
-        H = dp.hessian(x)
-        H = H.toarray() if hasattr(H, "toarray") else np.asarray(H)
-        kkt = np.block([[H, -A.T], [A, np.zeros((m, m))]])
-        rhs = np.r_[-(g - A.T @ mult), -(A @ x - levels[act])]
-        step = la.lstsq(kkt, rhs, cond=1e-14)[0]
-        if not np.all(np.isfinite(step)):
+    rows = sp.csr_matrix(rows)
+    act = set(np.flatnonzero(rows @ u - levels <= TOUCH_TOL * size).tolist())
+    x = u
+    for _ in range(MAX_CHANGES):
+        x, lam = _newton(dp, x, rows, levels, sorted(act))
+        if x is None:
+            log.debug("whole-beam polish: Newton's method did not converge")
             return None
-        x, mult = x + step[:n], mult + step[n:]
-        if np.linalg.norm(step[:n]) <= 1e-13 * np.linalg.norm(x):
-            break
+        gap = rows @ x - levels
+        worst = int(np.argmin(gap))
+        if gap[worst] < -1e-12 * size and worst not in act:
+            log.debug("whole-beam polish: row %d added (gap %.3g of the size)", worst,
+                      gap[worst] / size)
+            act.add(worst)
+            continue
+        pull = int(np.argmin(lam))
+        if lam[pull] < -EIG_TOL * max(float(np.max(np.abs(lam))), 1e-300):
+            log.debug("whole-beam polish: row %d dropped (multiplier %.3g)", pull, lam[pull])
+            act.discard(pull)
+            continue
+        break
     else:
-        log.debug("whole-beam polish: Newton's method did not converge")
+        log.debug("whole-beam polish: the active set did not settle")
         return None
     moved = float(np.linalg.norm(x - u))
     if not moved <= MOVE * float(np.linalg.norm(x)):
         log.debug("whole-beam polish: moved %.3g (the beam's norm %.3g)", moved,
                   float(np.linalg.norm(x)))
         return None
-    lam = np.zeros(rows.shape[0])
-    lam[act] = mult
     residual = psi_certificate(dp, modes, x, lam, rows, levels, 0.0)
-    if not passes(residual):
-        log.debug("whole-beam polish: the certificate fails (%s)", residual)
+    gap = rows @ x - levels
+    if not passes(residual) or np.min(gap) < -1e-12 * size:
+        log.debug("whole-beam polish: the certificate fails (%s, least gap %.3g of the size)",
+                  residual, float(np.min(gap)) / size)
         return None
-    stable, least = _stability(dp, x, A, mult)
+    stable = _stability(dp, x, rows, gap, lam, size)
     if stable is None:
         log.debug("whole-beam polish: the stability is undecided")
         return None
@@ -148,6 +174,54 @@ def polish_equilibrium(dp, modes, u, rows, levels):
     return Equilibrium(float(dp.energy(x) * dp.E0), stable, [float(a) for a in amplitudes],
                        dp.x.copy(), w, slope, float(residual["stationarity"]), "optimal",
                        float(dp.P), math.nan, float(dp.W), whole_beam=True)
+
+
+def _newton(dp, x, rows, levels, act) -> tuple:
+    """Newton's method on ``∇Π = A_actᵀ λ, A_act x = levels_act``; ``(x, lam)`` with one
+    multiplier per row of ``rows`` (zero off the independent active rows), or
+    ``(None, None)`` where it does not converge."""
+    A = rows[act].toarray() if act else np.zeros((0, len(x)))
+    norms = np.linalg.norm(A, axis=1)
+    keep = np.arange(len(act))
+    if len(act):
+        # independent rows (unit norm), by a QR with column pivoting of their transpose
+        _, R, piv = la.qr((A / norms[:, None]).T, mode="economic", pivoting=True)
+        d = np.abs(np.diag(R))
+        keep = np.sort(piv[:int(np.sum(d > RANK_TOL * d[0]))])
+    H0 = dp.hessian(x)
+    beta = float(np.max(np.abs(H0.diagonal()))) or 1.0     # rows balanced against H
+    scale = beta / norms[keep]
+    B = sp.csr_matrix(A[keep] * scale[:, None])
+    b = np.asarray(levels)[np.asarray(act, int)[keep]] * scale if len(keep) else np.zeros(0)
+    m = B.shape[0]
+    nu = np.zeros(m)
+    if m:
+        # the least-squares multipliers of the start: Newton then corrects them
+        nu = la.lstsq(B.toarray().T, dp.gradient(x))[0]
+    last = math.inf
+    for _ in range(MAX_ITER):
+        g = dp.gradient(x)
+        H = sp.csr_matrix(dp.hessian(x))
+        kkt = sp.bmat([[H, -B.T], [B, None]], format="csc")
+        rhs = np.r_[-(g - B.T @ nu), -(B @ x - b)]
+        try:
+            step = spla.splu(kkt).solve(rhs)
+        except RuntimeError:    # (singular: a degenerate set)
+            return None, None
+        if not np.all(np.isfinite(step)):
+            return None, None
+        x, nu = x + step[:len(x)], nu + step[len(x):]
+        # converged: a step of round-off, or one no longer halving once below
+        # STALL of the beam (the gradient's round-off grows like N^4 eps in the
+        # Hermite DOFs: at 30 elements the steps stalled near 1e-12 of it)
+        dx = float(np.linalg.norm(step[:len(x)]))
+        size = float(np.linalg.norm(x))
+        if dx <= 1e-13 * size or (dx <= STALL * size and dx > 0.5 * last):
+            lam = np.zeros(rows.shape[0])
+            lam[np.asarray(act, int)[keep]] = nu * scale
+            return x, lam
+        last = dx
+    return None, None
 
 
 def polisher(dp, modes):
@@ -161,20 +235,61 @@ def polisher(dp, modes):
     return lambda u: polish_equilibrium(dp, modes, u, rows, levels)
 
 
-def _stability(dp, x, A, mult) -> tuple:
-    """``(stable, least eigenvalue)`` from the second-order conditions, or ``(None, nan)``."""
+def settle(dp, polish, eqs, S) -> list:
+    """Every ``optimal`` entry of ``eqs`` (not the flat beam) polished on the whole beam
+    where that succeeds at its amplitudes (within ``MERGE S``), and entries so
+    polished that are one beam (deflections and slopes within 1e-9 of their
+    size) listed once.
+
+    Slices leave the beams of equilibria near the flat beam accurate to the
+    scene only, and a second search near the flat beam merges within its own
+    smaller square's distance: one saddle was listed twice, 7.2e-9 apart in
+    ``s`` (P1 pressed at gap 0, two modes, 30 elements).  Entries whose polish
+    fails stay as they are: near a contact that is degenerate (a row touching
+    with no force, where the active set cycles) one equilibrium may still be
+    listed several times, each passing the certificate (P1 pressed at gap 0
+    under 2e6 N/m at three times P_bar_h, 12 elements: five entries within
+    6e-5 of their amplitudes, stationarity up to 6e-9 in their own scale).
+    """
+    if polish is None:
+        return eqs
+    out = []
+    for e in eqs:
+        if e is not None and e.status == "optimal" and not e.whole_beam and np.any(e.w):
+            p = polish(dp.from_physical(e.w, e.slope))
+            if p is not None and same_point(p.amplitudes, e.amplitudes, S):
+                e = p
+        if e is not None and e.whole_beam and any(
+                o.whole_beam and _same_beam(o, e) for o in out if o is not None):
+            continue
+        out.append(e)
+    return out
+
+
+def _same_beam(a, b) -> bool:
+    top = max(float(np.max(np.abs(a.w))), float(np.max(np.abs(b.w))), 1e-300)
+    tilt = max(float(np.max(np.abs(a.slope))), float(np.max(np.abs(b.slope))), 1e-300)
+    return bool(np.max(np.abs(a.w - b.w)) <= 1e-9 * top
+                and np.max(np.abs(a.slope - b.slope)) <= 1e-9 * tilt)
+
+
+def _stability(dp, x, rows, gap, lam, size):
+    """True (strict local minimum), False (unstable) or None (undecided): see the notes."""
     H = dp.hessian(x)
     H = H.toarray() if hasattr(H, "toarray") else np.asarray(H)
-    Z = la.null_space(A) if len(A) else np.eye(len(x))
+    K = dp.K.toarray() if hasattr(dp.K, "toarray") else np.asarray(dp.K)
+    strong = np.flatnonzero(lam > EIG_TOL * max(float(np.max(lam, initial=0.0)), 1e-300))
+    touch = np.flatnonzero(gap <= TOUCH_TOL * size)
+    if _least(H, K, rows, strong) > EIG_TOL:
+        return True
+    if _least(H, K, rows, touch) < -EIG_TOL:
+        return False
+    return None
+
+
+def _least(H, K, rows, idx) -> float:
+    """Least eigenvalue of ``H`` relative to ``K`` on the null space of ``rows[idx]``."""
+    Z = la.null_space(rows[idx].toarray()) if len(idx) else np.eye(H.shape[0])
     if Z.shape[1] == 0:
-        # (the touching rows fix the beam: a minimum if every one pushes)
-        ok = len(mult) and np.min(mult) > EIG_TOL * np.max(np.abs(mult))
-        return (True, math.inf) if ok else (None, math.nan)
-    eig = np.linalg.eigvalsh(Z.T @ H @ Z)
-    tol = EIG_TOL * max(float(np.max(np.abs(eig))), 1e-300)
-    if eig[0] < -tol:
-        return False, float(eig[0])
-    pushing = not len(mult) or np.min(mult) > EIG_TOL * max(float(np.max(np.abs(mult))), 1e-300)
-    if eig[0] > tol and pushing:
-        return True, float(eig[0])
-    return None, math.nan
+        return math.inf
+    return float(la.eigh(Z.T @ H @ Z, Z.T @ K @ Z, eigvals_only=True)[0])
