@@ -134,7 +134,8 @@ class Equilibrium:
         at a kink of ``F`` or an end of the admissible amplitudes (an obstacle
         holding the beam), ``|F'|`` times the width of the bracket that holds
         the equilibrium; for the certified global minimiser listed from the
-        global method (with an obstacle), its certificate's stationarity.
+        global method (with an obstacle), and for an equilibrium polished on
+        the whole beam, its certificate's stationarity.
     status : str
         "optimal" when the fixed-amplitude solve and the zero are accurate,
         else "inaccurate".

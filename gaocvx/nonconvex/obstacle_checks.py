@@ -88,7 +88,9 @@ def at_global(dp, prog, out, minimisers, F, S) -> None:
     for m in minimisers:
         s = np.asarray(m.amplitudes, float)
         top = F(s)
-        near = [i for i, e in enumerate(out) if e is not None
+        # (not an entry certified on the whole beam: its stability is the
+        # second-order conditions', which no F within 1e-10 overrides)
+        near = [i for i, e in enumerate(out) if e is not None and not e.whole_beam
                 and same_point(e.amplitudes, s, S)]
         for i in near:
             e = out[i]
@@ -116,7 +118,7 @@ def at_global(dp, prog, out, minimisers, F, S) -> None:
         out.append(copy.copy(m))
 
 
-def check_contact(dp, prog, out, polish=None) -> None:
+def check_contact(dp, prog, out, polish=None, S: float = 0.0) -> None:
     """Equilibria with an obstacle: ``optimal`` only at a KKT point (``out`` in place).
 
     The reduced function's residuals (``|F'| |s|``, or ``|∇F|`` times a radius)
@@ -128,7 +130,8 @@ def check_contact(dp, prog, out, polish=None) -> None:
     4.3e-9 from s = 0, no KKT point, was called optimal on its residual).
     With ``polish`` (:func:`.whole_beam.polisher`) a failing entry is first
     polished on the whole beam from its slice's beam, and replaced by what
-    that returns, if it does.
+    that returns, if it does, at the entry's amplitudes (within ``MERGE S``:
+    not a neighbouring equilibrium).
     """
     for e in out:
         # (one certified on the whole beam in its own scale passed a stricter test
@@ -139,7 +142,7 @@ def check_contact(dp, prog, out, polish=None) -> None:
             continue
         if not kkt_point(dp, prog, e.amplitudes):
             polished = _polished(prog, e.amplitudes, polish)
-            if polished is not None:
+            if polished is not None and same_point(polished.amplitudes, e.amplitudes, S):
                 log.info("equilibria: the equilibrium at s = %s polished on the whole beam",
                          e.amplitudes)
                 for f in dataclasses.fields(e):
@@ -265,15 +268,18 @@ def exact_flat(dp, modes, out, classify, relabel: bool = False, S: float = 0.0) 
     # (or within the searches' merging distance (MERGE S) of s = 0: a one-mode zero
     # 4.3e-9 from it, 5.8e-12 m off w = 0, no KKT point, was listed beside it --
     # P1 in a channel at gap 0 under two point forces, 10 elements)
+    # (an entry certified on the whole beam is the flat beam only if its beam is:
+    # its amplitudes are exact, and another equilibrium may lie within MERGE S)
     flat = [e for e in out if e is not None and (
         float(np.max(np.abs(e.w))) <= near
-        or same_point(e.amplitudes, 0.0, S))]
+        or (same_point(e.amplitudes, 0.0, S) and not e.whole_beam))]
     energy = float(dp.energy(u0) * dp.E0)
     zeros = np.zeros(len(dp.x))
     if flat:
         keep = flat[0]
         keep.w, keep.slope, keep.energy = zeros, zeros.copy(), energy
         keep.amplitudes, keep.residual, keep.status = [0.0] * modes.k, 0.0, "optimal"
+        keep.whole_beam = False
         if relabel or len({e.stable for e in flat}) > 1:
             stable, curvature = classify(np.zeros(modes.k))
             keep.stable, keep.curvature = bool(stable), float(curvature)

@@ -52,9 +52,9 @@ from ..errors import SceneError, SolverError
 from ..scene import check_solve_arguments, numbers_of, whole
 from .bounds import check_bounded, equilibrium_box, estimate_boxes, zoom_boxes
 from .contours import sampled_roots
-from .equilibrium import Equilibrium, check_has_minimum, check_mountain_pass
+from .equilibrium import Equilibrium, check_has_minimum, check_mountain_pass, same_point
 from .obstacle_checks import check_contact, exact_flat, global_minimisers
-from .whole_beam import polisher
+from .whole_beam import polisher, settle
 
 __all__ = ["Equilibrium", "equilibria", "GRID", "MAX_GRID"]
 
@@ -210,14 +210,16 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         out = _find(dp, prog, S, points, grid, float(lo[0]), float(hi[0]),
                     scene_energy(dp, modes), polish)
         if obstacle:
-            check_contact(dp, prog, out, polish)
+            check_contact(dp, prog, out, polish, S)
         if obstacle and None not in out:
             def classify(s):
                 def dF(t):   # (one solve per probe)
                     F, d = prog.reduced([t])[:2]
                     return F, float(d[0])
                 return _classify(dF, 0.0, 1e-6 * S)
-            out = sorted(exact_flat(dp, modes, out, classify, S=S), key=lambda e: e.energy)
+            # (the beams near the flat one polished on the whole beam, listed once)
+            out = sorted(settle(dp, polish, exact_flat(dp, modes, out, classify, S=S), S),
+                         key=lambda e: e.energy)
     if out and all(e is not None for e in out):
         for e in out:
             parts = dp.energy_parts(dp.from_physical(e.w, e.slope))
@@ -382,7 +384,7 @@ def _find(dp, prog, S, seeds, grid, lo, hi, floor, polish=None):
             # polished on the whole beam, and listed as that returns it, if it does
             # (:mod:`.whole_beam`)
             polished = polish(u)
-            if polished is not None:
+            if polished is not None and same_point(polished.amplitudes, [r], S):
                 out.append(polished)
                 continue
         if res > ROOT_TOL:

@@ -48,7 +48,9 @@ every zero is found, so this search is a careful sampling, not a proof:
    equilibrium called ``optimal`` must pass the global method's optimality
    conditions (:func:`.obstacle_checks.check_contact`), else it is ``inaccurate``
    unless polished on the whole beam (:mod:`.whole_beam`, as are zeros of step 3
-   resolved to the scene's accuracy but not to their own: near the flat beam);
+   resolved to the scene's accuracy but not to their own -- near the flat beam --
+   and, last, every ``optimal`` entry where that succeeds, entries so polished
+   that are one beam listed once);
    one at the certified global minimiser's amplitudes is stable, and the
    certified minimiser is listed itself where no `optimal` stable entry as low is
    that close (:func:`.obstacle_checks.at_global`);
@@ -91,7 +93,7 @@ from .equilibrium import Equilibrium, same_point
 from .obstacle_checks import at_global, check_contact, exact_flat
 from .probes import curvature as _curvature, least_rise as _least_rise
 from .stationary import ROOT_TOL
-from .whole_beam import polisher
+from .whole_beam import polisher, settle as settle_beams
 
 __all__ = ["find_plane", "GRID2"]
 
@@ -226,7 +228,7 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
         if images:
             out += at_roots(_newton(grad, hessian, images, S), S, found())
             out += _edge_minima(dp, grad, None, S, found(), floor, images)
-        check_contact(dp, prog, out, polish)
+        check_contact(dp, prog, out, polish, S)
         at_global(dp, prog, out, minimisers, lambda s: grad(np.asarray(s, float))[0], S)
         if modes is not None:
             def classify(s):
@@ -249,12 +251,16 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
             # that passed it is that image (:mod:`.images`)
             def settle(s):
                 new = at_roots([s], S, strict=True)
-                check_contact(dp, prog, new, polish)
+                check_contact(dp, prog, new, polish, S)
                 return new[0] if new and new[0].status == "optimal" else None
             out = mirror.settle_twins(dp, modes, grad, out, S, settle)
             # (Newton's end is dropped where F is infinite there: no end, no image)
             out = mirror.complete_pairs(dp, modes, grad, out, S, lambda s: next(
                 (settle(end) for end in _newton(grad, hessian, [s], S)), None))
+    if zoom:
+        # (near the flat beam the slices' beams are the scene's accuracy: each
+        # polished on the whole beam, where that succeeds, and listed once)
+        out = settle_beams(dp, polish, out, S)
     out.sort(key=lambda e: e.energy)
     log.info("equilibria (k = 2): %d found from %d seeds, %d solves in %.2f s", len(out),
              len(seeds), len(cache), time.perf_counter() - t0)
@@ -316,7 +322,7 @@ def _at_roots(dp, grad, hessian, roots, S, known=(), strict=False, floor=0.0,
         res = work / size
         if res > ROOT_TOL and polish is not None and ok and work <= ROOT_TOL * max(size, floor):
             e = polish(u)
-            if e is not None:
+            if e is not None and same_point(e.amplitudes, r, S):
                 if not any(same_point(e.amplitudes, h, S) for h in have):
                     have.append(np.asarray(e.amplitudes, float))
                     out.append(e)
