@@ -311,7 +311,6 @@ def test_near_the_limit_on_a_bonded_bed_all_three_equilibria_are_listed():
     mirror image (the certified global minimiser).  All three are listed, the
     pair mirror images of each other at the certified energy; each checked
     against the independent energy."""
-    import types
     from test_equilibria_obstacle_campaign import check
     scene = Scene.from_dict({
         "beam": {"model": "gao", "supports": "P4", "length": 1.0, "E": 2.1e11, "nu": 0.3,
