@@ -119,3 +119,33 @@ def test_the_saddle_near_the_flat_beam_from_a_perturbed_slice():
     assert e is not None and not e.stable and e.status == "optimal"
     assert e.energy == pytest.approx(0.7634551778770783, rel=1e-9)
     assert polish_equilibrium(dp, modes, u * (1 + 1e-2), rows, levels) is None
+
+
+def test_the_stability_threshold_on_a_fine_mesh_exceeds_the_eigenvalues_round_off():
+    """At 480 elements (958 DOFs, cond K 7e10) the flat beam 1e-6 above P_bar_h:
+    H = K - p G, whose least eigenvalue relative to K is about -1e-6.  Computed
+    three ways -- the stability test's (Jacobi-scaled), unscaled dense, and
+    sparse Lanczos for the largest eigenvalue of (G, K) -- the values spread
+    (measured 5e-8, above EIG_TOL = 1e-8, where a review saw 2.3e-7 between the
+    scaled and unscaled ones): the threshold used there must exceed the spread
+    fivefold, and still decide the sign of -1e-6."""
+    import scipy.linalg as la
+    import scipy.sparse.linalg as spla
+
+    from gaocvx import Scene
+    from gaocvx.discrete import DiscreteProblem
+    from gaocvx.nonconvex.whole_beam import _least, eig_tol
+
+    data = {**SADDLE_SCENE, "mesh": {"elements": 480}, "load": {}}
+    P_bar = DiscreteProblem(Scene.from_dict(data)).P_bar_h
+    data["load"] = {"axial": P_bar * (1 + 1e-6)}
+    dp = DiscreteProblem(Scene.from_dict(data), check_convexity=False)
+    H, K = dp.hessian(np.zeros(dp.n)).toarray(), dp.K.toarray()
+    values = [_least(H, K, sp.csr_matrix((0, dp.n)), np.arange(0)),
+              float(la.eigh(H, K, eigvals_only=True)[0]),
+              1.0 - dp.p * float(spla.eigsh(sp.csc_matrix(dp.G), k=1, M=sp.csc_matrix(dp.K),
+                                            which="LA", tol=1e-15)[0][0])]
+    spread = max(values) - min(values)
+    tol = eig_tol(480)
+    assert 5 * spread <= tol, (values, tol)
+    assert all(v < -tol for v in values)

@@ -26,15 +26,16 @@ equilibrium only if it passes the global method's certificate
 (:func:`.certificate.psi_certificate`: stationarity of the Lagrangian in the
 convex part's metric, feasibility, the multipliers' sign, complementarity)
 *relative to its own size* (no floor), violates no row beyond round-off, and
-lies within ``MOVE`` of ``u``; callers also ask for its amplitudes to be the
+lies within ``MOVE`` of ``u`` (relative, in the norm of all DOFs); callers also ask for its amplitudes to be the
 zero's (within the searches' merging distance).
 
 Its stability comes from the second-order conditions, with eigenvalues
 relative to the bending stiffness ``K`` (generalised, ``Zᵀ H Z v = μ Zᵀ K Z v``:
 relative to the largest they fall as h³, below any threshold beyond 100
-elements): ``μ > EIG_TOL`` on the null space of the rows carrying a force
-(multiplier above ``EIG_TOL`` of the largest) is the sufficient condition of a
-strict local minimum (stable); ``μ < -EIG_TOL`` on the null space of every
+elements; Jacobi-scaled): ``μ > eig_tol(N)`` on the null space of the rows
+carrying a force (multiplier above ``EIG_TOL`` of the largest) is the
+sufficient condition of a strict local minimum (stable); ``μ < -eig_tol(N)``
+(``EIG_TOL``, larger beyond 178 elements: K's round-off) on the null space of every
 touching row is a direction, admissible both ways, along which the energy
 falls (unstable); anything else is undecided, and no answer is given.
 """
@@ -54,7 +55,8 @@ from ..tolerances import TOUCH_TOL
 from .certificate import psi_certificate
 from .equilibrium import Equilibrium, same_point
 
-__all__ = ["polish_equilibrium", "polisher", "settle", "MAX_UNKNOWNS", "MOVE", "EIG_TOL"]
+__all__ = ["polish_equilibrium", "polisher", "settle", "eig_tol", "MAX_UNKNOWNS", "MOVE",
+           "EIG_TOL"]
 
 log = logging.getLogger(__name__)
 
@@ -66,8 +68,22 @@ MAX_UNKNOWNS = 1000
 #: 5.3e-5 from the search's warm-started slice, 5e-11 from a slice solved afresh).
 MOVE = 1e-3
 #: Generalised eigenvalues ``μ`` (relative to ``K``) and multipliers (relative to
-#: the largest) within this of zero are taken as zero.
+#: the largest) within this of zero are taken as zero; eigenvalues within
+#: :func:`eig_tol` on finer meshes.
 EIG_TOL = 1e-8
+
+
+def eig_tol(elements: int) -> float:
+    """The threshold of ``μ`` on ``elements`` elements: ``EIG_TOL``, or ``1e-17 N^4``
+    where larger (K's condition grows as N^4: three ways of computing one least
+    ``μ`` at 480 elements -- the Jacobi-scaled and unscaled dense solves, and
+    sparse Lanczos on (G, K) -- spread over 5e-8, at 30 elements over 6e-12;
+    ``1e-17 N^4`` is 5.3e-7 at 480, 8e-8 at 300, and ``EIG_TOL`` to 178).
+
+    >>> eig_tol(30) == EIG_TOL, round(eig_tol(480), 8)
+    (True, 5.3e-07)
+    """
+    return max(EIG_TOL, 1e-17 * float(elements) ** 4)
 #: Newton iterations per active set, and changes of the active set, at most.
 MAX_ITER = 30
 MAX_CHANGES = 10
@@ -99,8 +115,10 @@ def polish_equilibrium(dp, modes, u, rows, levels):
         ``optimal``, with its stability from the second-order conditions, its
         residual the certificate's stationarity, its curvature NaN (no reduced
         function's) and ``whole_beam`` True; None where Newton's method does
-        not converge, moves further than ``MOVE``, the certificate fails, the
-        stability is undecided, or ``u`` is the flat beam (its own check,
+        not converge, the active set does not settle, the beam moves further
+        than ``MOVE`` (in the norm of all its DOFs, slopes included), the
+        certificate fails, the stability is undecided, or ``u`` is the flat
+        beam (its own check,
         :func:`.obstacle_checks.exact_flat`) or has more than ``MAX_UNKNOWNS``
         DOFs.
 
@@ -280,9 +298,10 @@ def _stability(dp, x, rows, gap, lam, size):
     K = dp.K.toarray() if hasattr(dp.K, "toarray") else np.asarray(dp.K)
     strong = np.flatnonzero(lam > EIG_TOL * max(float(np.max(lam, initial=0.0)), 1e-300))
     touch = np.flatnonzero(gap <= TOUCH_TOL * size)
-    if _least(H, K, rows, strong) > EIG_TOL:
+    tol = eig_tol(len(dp.x) - 1)
+    if _least(H, K, rows, strong) > tol:
         return True
-    if _least(H, K, rows, touch) < -EIG_TOL:
+    if _least(H, K, rows, touch) < -tol:
         return False
     return None
 
@@ -292,4 +311,9 @@ def _least(H, K, rows, idx) -> float:
     Z = la.null_space(rows[idx].toarray()) if len(idx) else np.eye(H.shape[0])
     if Z.shape[1] == 0:
         return math.inf
-    return float(la.eigh(Z.T @ H @ Z, Z.T @ K @ Z, eigvals_only=True)[0])
+    M, N = Z.T @ H @ Z, Z.T @ K @ Z
+    # (Jacobi-scaled: unscaled, the least eigenvalue at 480 elements, cond K 7e10,
+    # was 2.3e-7 off the scaled one and 1 + that of (H - K, K), which agree -- a
+    # review; at 30 elements all three agree to 6e-12)
+    d = 1.0 / np.sqrt(np.abs(np.diag(N)))
+    return float(la.eigh(d[:, None] * M * d, d[:, None] * N * d, eigvals_only=True)[0])
