@@ -105,10 +105,12 @@ def at_global(dp, prog, out, minimisers, F, S) -> None:
                 e.status = "optimal"
         # (only the certified one; where no `optimal` stable entry as low is that
         # close: an `optimal` saddle 1.3e-6 S beside a minimum is another
-        # equilibrium, and is kept)
+        # equilibrium, and is kept; an entry polished on the whole beam counts)
+        close = near + [i for i, e in enumerate(out) if e is not None and e.whole_beam
+                        and same_point(e.amplitudes, s, S)]
         if m.status != "optimal" or any(
                 out[i].status == "optimal" and out[i].stable
-                and F(out[i].amplitudes) <= top + 1e-10 * abs(top) for i in near) \
+                and F(out[i].amplitudes) <= top + 1e-10 * abs(top) for i in close) \
                 or not kkt_point(dp, prog, s):
             continue
         log.info("equilibria: the certified global minimiser at s = %s listed", s)
