@@ -147,8 +147,11 @@ def check_contact(dp, prog, out, polish=None, S: float = 0.0) -> None:
             if polished is not None and same_point(polished.amplitudes, e.amplitudes, S):
                 log.info("equilibria: the equilibrium at s = %s polished on the whole beam",
                          e.amplitudes)
+                # (at the zero's amplitudes during the search, as in
+                # stationary2._at_roots; whole_beam.settle gives the beam's at the end)
                 for f in dataclasses.fields(e):
-                    setattr(e, f.name, getattr(polished, f.name))
+                    if f.name != "amplitudes":
+                        setattr(e, f.name, getattr(polished, f.name))
                 continue
             log.info("equilibria: the equilibrium at s = %s is no KKT point: inaccurate",
                      e.amplitudes)

@@ -218,7 +218,8 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                     return F, float(d[0])
                 return _classify(dF, 0.0, 1e-6 * S)
             # (the beams near the flat one polished on the whole beam, listed once)
-            out = sorted(settle(dp, polish, exact_flat(dp, modes, out, classify, S=S), S),
+            out = sorted(settle(dp, polish, exact_flat(dp, modes, out, classify, S=S), S,
+                                modes),
                          key=lambda e: e.energy)
     if out and all(e is not None for e in out):
         for e in out:

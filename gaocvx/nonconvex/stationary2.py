@@ -260,7 +260,7 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
     if zoom:
         # (near the flat beam the slices' beams are the scene's accuracy: each
         # polished on the whole beam, where that succeeds, and listed once)
-        out = settle_beams(dp, polish, out, S)
+        out = settle_beams(dp, polish, out, S, modes)
     out.sort(key=lambda e: e.energy)
     log.info("equilibria (k = 2): %d found from %d seeds, %d solves in %.2f s", len(out),
              len(seeds), len(cache), time.perf_counter() - t0)
@@ -324,7 +324,12 @@ def _at_roots(dp, grad, hessian, roots, S, known=(), strict=False, floor=0.0,
             e = polish(u)
             if e is not None and same_point(e.amplitudes, r, S):
                 if not any(same_point(e.amplitudes, h, S) for h in have):
-                    have.append(np.asarray(e.amplitudes, float))
+                    # (listed at the zero's amplitudes, where its slices were
+                    # solved, during the search: the steps after it probe F
+                    # there; the polished beam's own replace them at the end,
+                    # whole_beam.settle)
+                    e.amplitudes = [float(a) for a in r]
+                    have.append(np.asarray(r, float))
                     out.append(e)
                 continue
         if res > (ROOT_TOL if strict else 1e3 * ROOT_TOL):  # Newton did not converge

@@ -253,11 +253,13 @@ def polisher(dp, modes):
     return lambda u: polish_equilibrium(dp, modes, u, rows, levels)
 
 
-def settle(dp, polish, eqs, S) -> list:
+def settle(dp, polish, eqs, S, modes=None) -> list:
     """Every ``optimal`` entry of ``eqs`` (not the flat beam) polished on the whole beam
     where that succeeds at its amplitudes (within ``MERGE S``), and entries so
     polished that are one beam (deflections and slopes within 1e-9 of their
-    size) listed once.
+    size) listed once; with ``modes``, every polished entry's amplitudes are its
+    beam's (during the search they are the zero's, where its slices were
+    solved, :func:`.stationary2.find_plane`).
 
     Slices leave the beams of equilibria near the flat beam accurate to the
     scene only, and a second search near the flat beam merges within its own
@@ -280,6 +282,9 @@ def settle(dp, polish, eqs, S) -> list:
         if e is not None and e.whole_beam and any(
                 o.whole_beam and _same_beam(o, e) for o in out if o is not None):
             continue
+        if e is not None and e.whole_beam and modes is not None:
+            u = dp.from_physical(e.w, e.slope)
+            e.amplitudes = [float(a) for a in np.asarray(dp.G @ modes.phi).T @ u]
         out.append(e)
     return out
 
