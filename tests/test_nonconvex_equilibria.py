@@ -385,11 +385,8 @@ def test_a_saddle_near_the_flat_beam_is_listed_polished_on_the_whole_beam():
     Newton step gave (0.7634551778770783 J)."""
     from nonconvex_independent import Discrete
     from test_equilibria_obstacle_campaign import _checked
-    data = {"beam": {"model": "gao", "length": 1.0, "E": 2.1e11, "nu": 0.3,
-                     "half_thickness": 0.1, "width": 1.0, "supports": "P1"},
-            "load": {"q": -530468.9759248127, "axial": 10028377450.572094},
-            "mesh": {"elements": 9}, "obstacle": {"gap": 0.0}}
-    scene = Scene.from_dict(data)
+    from test_whole_beam import SADDLE_SCENE
+    scene = Scene.from_dict(SADDLE_SCENE)          # (9 elements)
     eqs = equilibria(scene)
     assert [e.stable for e in eqs] == [True, True, False]
     assert all(e.status == "optimal" for e in eqs)
@@ -421,11 +418,8 @@ def test_near_flat_saddles_on_a_finer_mesh_are_listed_once():
     two beams within 1e-6 of their size), every one `optimal` and independently a
     KKT point of its stated stability, the saddle at the exact solve's energy."""
     from test_equilibria_obstacle_campaign import _checked
-    data = {"beam": {"model": "gao", "length": 1.0, "E": 2.1e11, "nu": 0.3,
-                     "half_thickness": 0.1, "width": 1.0, "supports": "P1"},
-            "load": {"q": -530468.9759248127, "axial": 10028377450.572094},
-            "mesh": {"elements": 30}, "obstacle": {"gap": 0.0}}
-    scene = Scene.from_dict(data)
+    from test_whole_beam import SADDLE_SCENE
+    scene = Scene.from_dict({**SADDLE_SCENE, "mesh": {"elements": 30}})
     eqs = equilibria(scene)
     assert all(e.status == "optimal" for e in eqs)
     assert sum(e.stable for e in eqs) == 2 and any(not e.stable for e in eqs)
