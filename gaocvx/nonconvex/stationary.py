@@ -55,6 +55,7 @@ from .contours import sampled_roots
 from .equilibrium import Equilibrium, check_has_minimum, check_mountain_pass, same_point
 from .obstacle_checks import check_contact, exact_flat, global_minimisers
 from .whole_beam import polisher, settle
+from .zooms import own_scale
 
 __all__ = ["Equilibrium", "equilibria", "GRID", "MAX_GRID"]
 
@@ -165,15 +166,18 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                          "modes; equilibria are searched for one or two (P below the third "
                          f"mode load {float(modes.loads[2]):.4g} N)", dp.P)
     dp = rescale_for(dp, modes)
-    if fast and obstacle:
-        from .fast_contact import FastContactProgram
-        from .slices import ContactSlices
-        prog = ContactSlices(FastContactProgram(dp, modes), scene_energy(dp, modes))
-    elif fast:
-        from .fast import FastProgram
-        prog = FastProgram(dp, modes)
-    else:
-        prog = NodeProgram(dp, modes)
+
+    def program(dp):
+        if fast and obstacle:
+            from .fast_contact import FastContactProgram
+            from .slices import ContactSlices
+            return ContactSlices(FastContactProgram(dp, modes), scene_energy(dp, modes))
+        if fast:
+            from .fast import FastProgram
+            return FastProgram(dp, modes)
+        return NodeProgram(dp, modes)
+
+    prog = program(dp)
     # (with a bonded foundation the modes' lambda_1 is that of K + c M: no bound
     # of u'K u / t, so none is used; equilibrium_box counts the foundation itself)
     lam1 = 0.0 if getattr(dp, "bilateral", False) else float(modes.lam[0]) * (1.0 - 1e-9)
@@ -195,6 +199,18 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         out = find_plane(dp, prog, S, floor=scene_energy(dp, modes), modes=modes,
                          starts=[np.asarray(e.amplitudes, float) for e in glob], box=(lo, hi),
                          minimisers=glob)
+
+        def own_search(d):
+            # the square [-1, 1]^2 of d's units, within its admissible amplitudes
+            p = program(d)
+            ranged = p.prog if fast else p
+            box = (np.maximum(-1.0, ranged.smin), np.minimum(1.0, ranged.smax))
+            return find_plane(d, p, 1.0, floor=scene_energy(d, modes), modes=modes, box=box,
+                              zoom=False)
+        if obstacle and None not in out:
+            # the flat beam's neighbourhood again, in its own scale (:mod:`.zooms`)
+            out = sorted(own_scale(dp, modes, out, S, lo, hi, own_search),
+                         key=lambda e: e.energy)
     else:
         # finer grids where the one-mode estimate puts the buckled beam, when the
         # box is far wider (bounds.estimate_boxes), and, with an obstacle, where

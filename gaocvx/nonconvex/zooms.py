@@ -13,19 +13,26 @@ Two places need a finer one, and each gets a second search of its own:
 Both take the search as an argument (``search(S, box=, starts=, minimisers=)``,
 :func:`.stationary2.find_plane` without zooms of its own) and return the
 merged list.
+
+A third place needs a finer *scale*, not a finer grid: the flat beam pressed at
+gap 0, whose saddle towards the buckled beam lies so near it, and so low, that
+the scene's slices cannot resolve its reduced gradient at all
+(:func:`own_scale`: the search again in a problem measured in that saddle's
+own size).
 """
 
 from __future__ import annotations
 
 import logging
+import math
 
 import numpy as np
 from scipy.sparse.csgraph import connected_components
 
 from .equilibrium import MERGE, same_point
 
-__all__ = ["near_flat", "clusters", "NEAR_FLAT", "CLUSTER_STEPS", "CLUSTER_GRID",
-           "MAX_CLUSTERS"]
+__all__ = ["near_flat", "clusters", "own_scale", "peak_amplitude", "NEAR_FLAT",
+           "CLUSTER_STEPS", "CLUSTER_GRID", "MAX_CLUSTERS", "OWN_BOX"]
 
 log = logging.getLogger(__name__)
 
@@ -42,6 +49,10 @@ CLUSTER_GRID = 13
 # the first search in the scenes measured: its zero curves, descents and edge
 # minima more than its grid).
 MAX_CLUSTERS = 3
+# The square searched in the flat beam's own scale spans this many times the
+# linearised energy's peak amplitude (own_scale: the saddles found there lay at
+# 0.1 to 0.3 of it in the campaign's scenes).
+OWN_BOX = 4.0
 
 
 def near_flat(search, S, out, lo, hi, minimisers) -> list:
@@ -163,3 +174,89 @@ def clusters(search, S, out, lo, hi, step, minimisers) -> list:
         log.info("equilibria (k = 2): a cluster of %d searched again on [%s, %s]: %d more",
                  len(g), np.round(a, 4), np.round(b, 4), len(out) - before)
     return out
+
+
+def peak_amplitude(dp, modes) -> float:
+    """The largest amplitude, over the unstable modes, at which the energy linearised at
+    the flat beam peaks along a mode: ``max_i |f' phi_i / phi_i' H_0 phi_i|`` (in
+    ``dp``'s units; the load's work rises linearly, the mode's fall quadratically,
+    and the quartic term is negligible so near the flat beam).  NaN without a
+    falling mode.
+
+    >>> import numpy as np, scipy.sparse as sp
+    >>> from types import SimpleNamespace
+    >>> dp = SimpleNamespace(f=np.array([-2.0, 0.0]),
+    ...                      hessian=lambda u: sp.diags([-4.0, 1.0]))
+    >>> peak_amplitude(dp, SimpleNamespace(phi=np.eye(2)[:, :1]))
+    0.5
+    """
+    H0 = dp.hessian(np.zeros_like(dp.f))
+    peaks = []
+    for phi in np.asarray(modes.phi, float).T:
+        curve = float(phi @ (H0 @ phi))
+        if curve < 0.0:
+            peaks.append(abs(float(dp.f @ phi) / curve))
+    return max(peaks, default=math.nan)
+
+
+def own_scale(dp, modes, out, S, lo, hi, search) -> list:
+    """The flat beam's neighbourhood searched again in a problem of its own scale.
+
+    Where ``out`` lists the flat beam as a stable ``optimal`` equilibrium (pressed
+    at gap 0), its neighbourhood holds the saddles between it and the buckled
+    beam (the mountain pass, :func:`.equilibrium.check_mountain_pass`).  Pressed
+    by a small load, they lie where the load's work and the unstable modes' fall
+    balance, so near the flat beam and so low that the scene's slices, whose
+    accuracy is relative to the scene's energy, cannot resolve ``∇F`` there at
+    all (the campaign's seeds 7101-7108: in 12 of 96 scenes the list was two
+    minima and no saddle, the saddle 1e-4 to 19 J against the scene's 1e7 to
+    1e9 J; where one saddle was found, its mirror pairs beside it were not).
+    The problem is measured again in ``R = OWN_BOX`` times
+    :func:`peak_amplitude` (``dp.rescaled``), and ``search(dp_R)`` searches its
+    square of size 1 (:func:`.stationary2.find_plane` without zooms).  Its
+    ``optimal`` equilibria other than the flat beam, and not on a side of the
+    square where the admissible amplitudes go on (minima there are the
+    square's), are listed in ``dp``'s units unless one is there already (within
+    ``MERGE R``); an entry of ``out`` there that is not ``optimal`` gives way.
+
+    Parameters
+    ----------
+    dp, modes : DiscreteProblem, Modes
+        The problem with an obstacle and its two unstable modes.
+    out : list of Equilibrium
+        The search's equilibria.
+    S : float
+        The searched square's size (no second search where ``R`` is not below it).
+    lo, hi : ndarray
+        The admissible amplitudes' box.
+    search : callable
+        ``search(dp_R) -> list of Equilibrium`` (amplitudes in ``dp_R``'s units).
+
+    Returns
+    -------
+    list of Equilibrium
+        ``out``, with what the second search found added.
+    """
+    if dp.contact != "obstacle" or not any(
+            e.stable and e.status == "optimal" and not np.any(e.w) for e in out):
+        return out
+    R = OWN_BOX * peak_amplitude(dp, modes)
+    if not (math.isfinite(R) and 0.0 < R < S):
+        return out
+    found = search(dp.rescaled(dp.W * R))
+    edge = 1.0 - 1e-6
+    added = []
+    for f in found:
+        s = np.asarray(f.amplitudes, float)
+        if (f.status != "optimal" or not np.any(f.w)
+                or np.any((s <= -edge) & (lo < -R)) or np.any((s >= edge) & (hi > R))):
+            continue
+        f.amplitudes, f.W = [float(a) * R for a in s], float(dp.W)
+        if not any(same_point(f.amplitudes, e.amplitudes, R)
+                   for e in added + [e for e in out if e.status == "optimal"]):
+            added.append(f)
+    kept = [e for e in out if e.status == "optimal" or not any(
+        same_point(e.amplitudes, f.amplitudes, R) for f in added)]
+    log.info("equilibria (k = 2): near the flat beam searched again in its own scale "
+             "(%.3g S): %d more, %d replaced", R / S, len(added), len(out) - len(kept))
+    return kept + added
