@@ -608,14 +608,20 @@ def test_two_modes_pressed_flat_at_gap_zero_is_no_traceback():
     beyond the obstacle's edge for a slope (a step of 6e11, a singular KKT
     factor, a traceback); both minima now, each independently checked, and the
     unstable equilibrium a path between two strict minima must cross (found since
-    the zeros on the line of symmetry s2 = 0 are looked for along it)."""
+    the zeros on the line of symmetry s2 = 0 are looked for along it), at
+    10163 J; and, since the flat beam's neighbourhood is searched in its own
+    scale (zooms.own_scale), a mirror pair of saddles below it, at 5315 J."""
     from conftest import scene_dict
     from gaocvx import Scene
     scene = Scene.from_dict(scene_dict("P4", q=-5e7, axial=8e9, obstacle=0.0, elements=8))
     eqs = equilibria(scene)
     _checked(scene, eqs)
-    assert [e.stable for e in eqs] == [True, True, False]
+    assert [e.stable for e in eqs] == [True, True, False, False, False]
     assert np.max(np.abs(eqs[1].w)) <= 1e-9        # the flat beam, held at gap 0
+    # the pair: mirror images (x -> L - x), one energy
+    a, b = eqs[2], eqs[3]
+    assert abs(a.energy - b.energy) <= 1e-9 * abs(a.energy)
+    np.testing.assert_allclose(a.w, b.w[::-1], atol=1e-9 * np.max(np.abs(a.w)))
 
 
 @pytest.mark.slow

@@ -383,7 +383,6 @@ def test_a_saddle_near_the_flat_beam_is_listed_polished_on_the_whole_beam():
     independently a KKT point of the stated stability, and stationary in its own
     K-norm (no floor of the scene's), with the energy the helper's independent
     Newton step gave (0.7634551778770783 J)."""
-    from nonconvex_independent import Discrete
     from test_equilibria_obstacle_campaign import _checked
     from test_whole_beam import SADDLE_SCENE
     scene = Scene.from_dict(SADDLE_SCENE)          # (9 elements)
@@ -395,17 +394,51 @@ def test_a_saddle_near_the_flat_beam_is_listed_polished_on_the_whole_beam():
     top = float(np.max(np.abs(saddle.w)))
     assert 5e-6 < top < 1e-5
     _checked(scene, eqs)
-    # stationary in its own scale: the Lagrangian's gradient in the K^-1 norm,
-    # relative to the saddle's own K-norm
-    en = Discrete(scene, top)
-    x = en.from_nodal(saddle.w, saddle.slope)
+    _stationary_in_its_own_scale(scene, saddle)
+
+
+def _stationary_in_its_own_scale(scene, e):
+    """The independent energy's KKT conditions at ``e`` in its own scale: the
+    Lagrangian's gradient in the K^-1 norm within 1e-9 of ``e``'s own K-norm
+    (no floor of the scene's), feasibility, and a row touching."""
+    from nonconvex_independent import Discrete
+    en = Discrete(scene, float(np.max(np.abs(e.w))))
+    x = en.from_nodal(e.w, e.slope)
     out = en.kkt(x)
     _, g0 = en(np.zeros(en.n))
     norm = en.norm_K(x)
     floor = 1e-6 * float(np.linalg.norm(np.linalg.solve(np.linalg.cholesky(en.stiffness()), g0)))
-    assert norm > floor          # (so kkt's stationarity is relative to the saddle's norm)
+    assert norm > floor          # (so kkt's stationarity is relative to e's norm)
     assert out["stationarity"] <= 1e-9 and out["feasibility"] <= 1e-12
     assert out["touching"] >= 1
+
+
+def test_a_saddle_too_low_for_the_scenes_slices_is_found_in_the_flat_beams_own_scale():
+    """A helper's campaign (seed 7102, draw 30): P2 pressed at gap 0 by 3.7e5 N/m,
+    two modes, 9 elements.  The buckled beam (-4.1e8 J) and the flat one were
+    listed, both `inaccurate` by the mountain-pass rule: the saddle between them
+    lies so near the flat beam and so low that the scene's slices could not
+    resolve its reduced gradient at all, and no zero reached the whole-beam
+    polish.  Searched again in a problem of the flat beam's own scale
+    (zooms.own_scale), it is listed and the list is `optimal`: each entry
+    independently a KKT point of its stated stability, the saddle within 1e-4
+    of the buckled beam's size and stationary in its own scale (polished on the
+    whole beam; resolved in the rescaled problem's units only, it was 6.6e-9)."""
+    from test_equilibria_obstacle_campaign import _checked
+    scene = Scene.from_dict({
+        "beam": {"model": "gao", "supports": "P2", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                 "half_thickness": 0.1, "width": 1.0},
+        "load": {"q": -372471.13386204804, "axial": 8269963467.228407},
+        "mesh": {"elements": 9}, "obstacle": {"gap": 0.0}})
+    eqs = equilibria(scene)
+    assert all(e.status == "optimal" for e in eqs)
+    assert [e.stable for e in eqs][:2] == [True, True] and not eqs[-1].stable
+    assert not np.any(eqs[1].w)                      # the flat beam, pressed
+    _checked(scene, eqs)
+    top = float(np.max(np.abs(eqs[0].w)))
+    for saddle in eqs[2:]:
+        assert 0.0 < np.max(np.abs(saddle.w)) < 1e-4 * top
+        _stationary_in_its_own_scale(scene, saddle)
 
 
 @pytest.mark.slow

@@ -205,8 +205,10 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
             p = program(d)
             ranged = p.prog if fast else p
             box = (np.maximum(-1.0, ranged.smin), np.minimum(1.0, ranged.smax))
-            return find_plane(d, p, 1.0, floor=scene_energy(d, modes), modes=modes, box=box,
-                              zoom=False)
+            found = find_plane(d, p, 1.0, floor=scene_energy(d, modes), modes=modes, box=box,
+                               zoom=False)
+            # (polished on the whole beam where that succeeds, as the first search's)
+            return settle(d, polisher(d, modes), found, 1.0, modes)
         if obstacle and None not in out:
             # the flat beam's neighbourhood again, in its own scale (:mod:`.zooms`)
             out = sorted(own_scale(dp, modes, out, S, lo, hi, own_search),
