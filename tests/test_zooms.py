@@ -1,7 +1,7 @@
 """The second search near the flat beam in its own scale (gaocvx.nonconvex.zooms.own_scale).
 
-Hand-made lists and problems: when the search runs (the flat beam a certified
-minimum) and when not, the scale it measures the problem
+Hand-made lists and problems: when the search runs (the flat beam listed stable
+and `optimal`) and when not, the scale it measures the problem
 in (the linearised energy's peak along a mode, worked out by hand), and what
 of its finds is listed, in whose units.  The campaign scenes it was made for
 are in tests/test_nonconvex_equilibria.py.
@@ -26,9 +26,10 @@ def _problem():
               rescaled=lambda W: NS(W=W)), NS(phi=np.eye(2))
 
 
-def _eq(stable, w, s, status="optimal", energy=0.0):
-    return NS(stable=stable, status=status, w=np.asarray(w, float), amplitudes=list(s),
-              W=3.0, energy=energy)
+def _eq(stable, w, s, status="optimal", energy=0.0, W=3.0, polished=False):
+    w = np.asarray(w, float)
+    return NS(stable=stable, status=status, w=w, slope=np.r_[w[1:], 0.0] - w,
+              amplitudes=list(s), W=W, energy=energy, whole_beam=polished)
 
 
 def _minima():
@@ -48,7 +49,7 @@ def test_peak_amplitude_is_the_largest_over_the_falling_modes():
     [_eq(False, [0.0, 0.0], [0.0, 0.0]), _eq(True, [5.0, 1.0], [40.0, 2.0])],  # flat unstable
     [_eq(True, [0.0, 0.0], [0.0, 0.0], "inaccurate"), _eq(True, [5.0, 1.0], [40.0, 2.0])],
 ])
-def test_not_searched_unless_the_flat_beam_is_a_certified_minimum(out):
+def test_not_searched_unless_the_flat_beam_is_listed_stable_and_optimal(out):
     dp, modes = _problem()
 
     def search(d):
@@ -64,12 +65,12 @@ def test_its_finds_are_listed_in_the_problems_units():
 
     def search(d):
         seen.append(d.W)
-        return [_eq(True, [0.0, 0.0], [0.0, 0.0]),                       # the flat beam
-                _eq(False, [1e-3, 0.0], [0.2, -0.1], energy=1e-4),       # the saddle
-                _eq(False, [1e-3, 0.0], [0.2, -0.1 + 1e-8], energy=1e-4),  # itself again
-                _eq(False, [2e-3, 0.0], [0.3, 0.3], "inaccurate"),       # not resolved
-                _eq(True, [4e-3, 0.0], [1.0, 0.5], energy=-1e-3),        # on the square's side
-                _eq(True, [4e-3, 0.0], [0.5, -1.0], energy=-1e-3)]       # on a side the box ends
+        return [_eq(True, [0.0, 0.0], [0.0, 0.0], W=d.W),                 # the flat beam
+                _eq(False, [1e-3, 0.0], [0.2, -0.1], energy=1e-4, W=d.W),  # the saddle
+                _eq(False, [1e-3, 0.0], [0.2, -0.1 + 1e-8], energy=1e-4, W=d.W),  # again
+                _eq(False, [2e-3, 0.0], [0.3, 0.3], "inaccurate", W=d.W),  # not resolved
+                _eq(True, [4e-3, 0.0], [1.0, 0.5], energy=-1e-3, W=d.W),   # on the square's side
+                _eq(True, [4e-3, 0.0], [0.5, -1.0], energy=-1e-3, W=d.W)]  # where the box ends
     # the first search's saddle elsewhere stays; its unresolved one at the
     # second's saddle gives way
     first = _minima() + [_eq(False, [0.1, 0.0], [3.0, 3.0]),
@@ -77,18 +78,45 @@ def test_its_finds_are_listed_in_the_problems_units():
     out = own_scale(dp, modes, first, 100.0, np.array([-100.0, -R]),
                     np.full(2, 100.0), search)
     assert seen == [pytest.approx(dp.W * R, rel=1e-15)]
-    assert out[:3] == first[:3]
+    assert [id(e) for e in out[:3]] == [id(e) for e in first[:3]]
     added = out[3:]
     assert len(added) == 2
     assert added[0].amplitudes == pytest.approx([0.2 * R, -0.1 * R], rel=1e-15)
     assert added[1].amplitudes == pytest.approx([0.5 * R, -R], rel=1e-15)
-    assert all(e.W == dp.W for e in added)
+    assert all(e.W == dp.W for e in added)       # (the finds came in d's, 6.0)
 
 
-def test_not_searched_where_the_peak_is_beyond_the_square():
+@pytest.mark.parametrize("S, side", [(1.5, 1.5),     # R = 2 beyond the square
+                                     (100.0, 1.9)])  # beyond half the admissible box
+def test_not_searched_where_the_square_would_span_the_searched_one(S, side):
     dp, modes = _problem()
 
     def search(d):
         raise AssertionError("searched")
     out = _minima()
-    assert own_scale(dp, modes, out, 1.5, np.full(2, -1.5), np.full(2, 1.5), search) is out
+    assert own_scale(dp, modes, out, S, np.full(2, -side), np.full(2, side), search) is out
+
+
+def test_an_unpolished_entry_at_a_polished_ones_beam_gives_way():
+    """Within SAME_BEAM (1e-4) of a polished entry's deflection and slope, of its
+    stability and inside the square, an entry not polished is that equilibrium to the
+    slices' accuracy and is dropped; further away, of the other stability, or outside
+    the square it stays."""
+    dp, modes = _problem()
+    R = OWN_BOX * 0.5
+    w = np.array([1e-3, 5e-4, 0.0])
+
+    def search(d):
+        return [_eq(False, w, [0.2, 0.1], W=d.W, polished=True),
+                _eq(False, w * (1 + 1e-3), [0.2, 0.1 + 1e-3], W=d.W)]       # 1e-3 off: stays
+    first = _minima() + [
+        _eq(False, w * (1 + 3e-5), [0.2 * R, 0.1 * R * (1 + 3e-5)]),            # dropped
+        _eq(True, w * (1 + 3e-5), [0.2 * R, 0.1 * R * (1 + 4e-5)]),             # a minimum: stays
+        _eq(False, np.r_[w[:2] * (1 + 3e-5), 0.0], [3.0 * R, 0.0])]             # outside: stays
+    first[0].w, first[0].slope = np.zeros(3), np.zeros(3)
+    first[1].w, first[1].slope = np.ones(3), np.zeros(3)
+    out = own_scale(dp, modes, first, 100.0, np.full(2, -100.0), np.full(2, 100.0), search)
+    ids = [id(e) for e in out]
+    assert id(first[2]) not in ids
+    assert all(id(e) in ids for e in first[:2] + first[3:])
+    assert len(out) == len(first) + 1 and sum(e.whole_beam for e in out) == 1

@@ -177,6 +177,11 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
             return FastProgram(dp, modes)
         return NodeProgram(dp, modes)
 
+    def admissible(prog):
+        # the admissible amplitudes' range of prog's node program
+        ranged = prog.prog if fast else prog
+        return np.asarray(ranged.smin, float), np.asarray(ranged.smax, float)
+
     prog = program(dp)
     # (with a bonded foundation the modes' lambda_1 is that of K + c M: no bound
     # of u'K u / t, so none is used; equilibrium_box counts the foundation itself)
@@ -191,8 +196,8 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         # is a linear program's, its ends bounds by weak duality
         # (:func:`.fast_check.lp_ranges`; both node programs compute it on
         # construction).
-        ranged = prog.prog if fast else prog
-        lo, hi = np.maximum(lo, ranged.smin), np.minimum(hi, ranged.smax)
+        smin, smax = admissible(prog)
+        lo, hi = np.maximum(lo, smin), np.minimum(hi, smax)
     if modes.k == 2:
         from .stationary2 import find_plane
         glob = global_minimisers(dp, modes) if obstacle else []
@@ -203,12 +208,13 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         def own_search(d):
             # the square [-1, 1]^2 of d's units, within its admissible amplitudes
             p = program(d)
-            ranged = p.prog if fast else p
-            box = (np.maximum(-1.0, ranged.smin), np.minimum(1.0, ranged.smax))
+            smin, smax = admissible(p)
+            box = (np.maximum(-1.0, smin), np.minimum(1.0, smax))
             found = find_plane(d, p, 1.0, floor=scene_energy(d, modes), modes=modes, box=box,
                                zoom=False)
             # (polished on the whole beam where that succeeds, as the first search's)
             return settle(d, polisher(d, modes), found, 1.0, modes)
+
         if obstacle and None not in out:
             # the flat beam's neighbourhood again, in its own scale (:mod:`.zooms`)
             out = sorted(own_scale(dp, modes, out, S, lo, hi, own_search),

@@ -63,7 +63,7 @@ every zero is found, so this search is a careful sampling, not a proof:
    closer than 1.5 grid steps with two or more minima among them (a row of
    minima along a surface); after it, near the flat beam, in a square of the
    size of the equilibria found there; their ``optimal`` equilibria are added.
-   And where the flat beam is a certified minimum, :func:`.stationary.equilibria`
+   And where the flat beam is listed stable and ``optimal``, :func:`.stationary.equilibria`
    searches its neighbourhood again in a problem of its own scale
    (:func:`.zooms.own_scale`).
 

@@ -53,6 +53,9 @@ MAX_CLUSTERS = 3
 # linearised energy's peak amplitude (own_scale: the saddles found there lay at
 # 0.1 to 0.3 of it in the campaign's scenes).
 OWN_BOX = 4.0
+# An entry not polished on the whole beam whose deflection and slope lie within
+# this fraction of a polished one's is that equilibrium (own_scale).
+SAME_BEAM = 1e-4
 
 
 def near_flat(search, S, out, lo, hi, minimisers) -> list:
@@ -177,11 +180,25 @@ def clusters(search, S, out, lo, hi, step, minimisers) -> list:
 
 
 def peak_amplitude(dp, modes) -> float:
-    """The largest amplitude, over the unstable modes, at which the energy linearised at
-    the flat beam peaks along a mode: ``max_i |f' phi_i / phi_i' H_0 phi_i|`` (in
-    ``dp``'s units; the load's work rises linearly, the mode's fall quadratically,
-    and the quartic term is negligible so near the flat beam).  NaN without a
-    falling mode.
+    """The largest amplitude, over the falling modes, at which the energy linearised at
+    the flat beam peaks along a mode.
+
+    The load's work rises linearly along a mode ``phi_i``, its fall (where
+    ``phi_i' H_0 phi_i < 0``, ``H_0`` the Hessian at ``w = 0``) quadratically, and
+    the quartic term is negligible so near the flat beam: the energy along it
+    peaks at ``|f' phi_i / phi_i' H_0 phi_i|``.
+
+    Parameters
+    ----------
+    dp : DiscreteProblem
+        The problem (its load ``f`` and Hessian).
+    modes : Modes
+        Its unstable modes (columns of ``phi``).
+
+    Returns
+    -------
+    float
+        The largest such amplitude in ``dp``'s units; NaN without a falling mode.
 
     >>> import numpy as np, scipy.sparse as sp
     >>> from types import SimpleNamespace
@@ -209,7 +226,7 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
     balance, so near the flat beam and so low that the scene's slices, whose
     accuracy is relative to the scene's energy, cannot resolve ``∇F`` there at
     all (the campaign's seeds 7101-7108: in 12 of 96 scenes the list was two
-    minima and no saddle, the saddle 1e-4 to 19 J against the scene's 1e7 to
+    minima and no saddle, the saddles 1e-4 to 183 J against the scene's 1e7 to
     1e9 J; where one saddle was found, its mirror pairs beside it were not).
     The problem is measured again in ``R = OWN_BOX`` times
     :func:`peak_amplitude` (``dp.rescaled``), and ``search(dp_R)`` searches its
@@ -217,7 +234,9 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
     ``optimal`` equilibria other than the flat beam, and not on a side of the
     square where the admissible amplitudes go on (minima there are the
     square's), are listed in ``dp``'s units unless one is there already (within
-    ``MERGE R``); an entry of ``out`` there that is not ``optimal`` gives way.
+    ``MERGE R``); an entry of ``out`` there that is not ``optimal`` gives way, and
+    so does one not polished on the whole beam within ``SAME_BEAM`` of one that
+    is (deflection and slope, relative).
 
     Parameters
     ----------
@@ -226,7 +245,8 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
     out : list of Equilibrium
         The search's equilibria.
     S : float
-        The searched square's size (no second search where ``R`` is not below it).
+        The searched square's size (no second search where ``R`` is not below it,
+        nor below half the admissible box's largest side).
     lo, hi : ndarray
         The admissible amplitudes' box.
     search : callable
@@ -241,7 +261,9 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
             e.stable and e.status == "optimal" and not np.any(e.w) for e in out):
         return out
     R = OWN_BOX * peak_amplitude(dp, modes)
-    if not (math.isfinite(R) and 0.0 < R < S):
+    # (not where the square would span the admissible box: a narrow channel, whose
+    # search is already measured in its width, minimum.rescale_for)
+    if not (math.isfinite(R) and 0.0 < R < min(S, 0.5 * float(np.max(hi - lo)))):
         return out
     found = search(dp.rescaled(dp.W * R))
     edge = 1.0 - 1e-6
@@ -257,6 +279,36 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
             added.append(f)
     kept = [e for e in out if e.status == "optimal" or not any(
         same_point(e.amplitudes, f.amplitudes, R) for f in added)]
+    merged = _one_beam(kept + added, R)
     log.info("equilibria (k = 2): near the flat beam searched again in its own scale "
-             "(%.3g S): %d more, %d replaced", R / S, len(added), len(out) - len(kept))
-    return kept + added
+             "(%.3g S): %d more, %d replaced", R / S, len(merged) - len(kept),
+             len(out) - len(kept))
+    return merged
+
+
+def _one_beam(eqs, R) -> list:
+    """``eqs`` without the entries in the square ``[-R, R]^2`` not polished on the whole
+    beam that lie within ``SAME_BEAM`` of one there that is, of their stability (its
+    beam is theirs to the slices' accuracy).
+
+    Slices leave a saddle near the flat beam accurate to some 1e-9 of its
+    stationarity, its amplitudes to some 1e-5 of their size where a contact is
+    degenerate, far beyond ``MERGE R``: a review's P1 pressed at gap 0 at three
+    times P_bar_h (12 elements) listed one saddle three times, 4.1e-10 m and
+    1.7e-10 m apart at amplitudes of 3.5e-5 m, once polished.  Distinct
+    equilibria near the flat beam lay 4e-3 of their size apart at the closest
+    (the campaign's seeds 7101-7108).
+    """
+    def inside(e):
+        return float(np.max(np.abs(e.amplitudes))) <= R
+
+    polished = [e for e in eqs if e.whole_beam and inside(e)]
+    return [e for e in eqs if e.whole_beam or not inside(e) or not any(
+        p.stable == e.stable and _near(e, p) for p in polished)]
+
+
+def _near(a, b) -> bool:
+    top = max(float(np.max(np.abs(a.w))), float(np.max(np.abs(b.w))), 1e-300)
+    tilt = max(float(np.max(np.abs(a.slope))), float(np.max(np.abs(b.slope))), 1e-300)
+    return bool(np.max(np.abs(a.w - b.w)) <= SAME_BEAM * top
+                and np.max(np.abs(a.slope - b.slope)) <= SAME_BEAM * tilt)
