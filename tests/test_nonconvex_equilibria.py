@@ -465,6 +465,48 @@ def test_near_flat_saddles_on_a_finer_mesh_are_listed_once():
     _checked(scene, eqs)
 
 
+@pytest.mark.parametrize("q", [-10.0])
+def test_a_flat_beam_pressed_by_a_tiny_load_is_a_stable_equilibrium(q):
+    """A review: the seed-7102 scene (P2 at gap 0, two modes, 9 elements) pressed by
+    10 N/m or 1e-3 N/m listed the flat beam unstable and `optimal`; independently
+    it is a strict minimum (every row pressed), its basin narrower than the probes'
+    1e-8 S.  Its label now comes from the second-order conditions, and every entry
+    is independently a KKT point of its stated stability."""
+    from test_equilibria_obstacle_campaign import _checked
+    scene = Scene.from_dict({
+        "beam": {"model": "gao", "supports": "P2", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                 "half_thickness": 0.1, "width": 1.0},
+        "load": {"q": q, "axial": 8269963467.228407},
+        "mesh": {"elements": 9}, "obstacle": {"gap": 0.0}})
+    eqs = equilibria(scene)
+    flat = [e for e in eqs if not np.any(e.w)]
+    assert len(flat) == 1 and flat[0].stable
+    assert all(e.status == "optimal" for e in eqs)
+    _checked(scene, eqs)
+
+
+@pytest.mark.slow
+def test_near_flat_saddles_of_a_degenerate_contact_are_listed_once():
+    """A review: P1 pressed at gap 0 by 2e6 N/m at three times P_bar_h, 12 elements.
+    The search in the flat beam's own scale listed one saddle three times -- twice
+    as its slices left it, 4.1e-10 m apart at amplitudes of 3.5e-5 m (a degenerate
+    contact), far beyond its merging distance, and once polished on the whole beam
+    -- 22 entries, six pairs one equilibrium by the campaign's rule.  No two entries
+    are one now, every entry `optimal` and independently a KKT point of its stated
+    stability."""
+    from test_equilibria_obstacle_campaign import _checked, _same
+    scene = Scene.from_dict({
+        "beam": {"model": "gao", "supports": "P1", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                 "half_thickness": 0.1, "width": 1.0},
+        "load": {"q": -2e6, "axial": 14018979251.896896},
+        "mesh": {"elements": 12}, "obstacle": {"gap": 0.0}})
+    eqs = equilibria(scene)
+    assert all(e.status == "optimal" for e in eqs)
+    assert not [(a.energy, b.energy) for i, a in enumerate(eqs) for b in eqs[:i]
+                if _same(a, b, 1.0)]
+    _checked(scene, eqs)
+
+
 @pytest.mark.parametrize("bed", [False, True])
 def test_at_the_limit_without_load_no_unstable_list_is_optimal(bed):
     """At P_bar_h (to 1e-12) without load the flat beam is a quartic minimum and the
