@@ -258,6 +258,7 @@ def exact_flat(dp, modes, out, classify, relabel: bool = False, S: float = 0.0) 
     from ..mixed import MixedForm
     from .certificate import certify_contact
     from .node import obstacle_rows
+    from .whole_beam import MAX_UNKNOWNS, second_order
 
     rows, levels = obstacle_rows(dp)
     u0 = np.zeros(dp.n)
@@ -265,9 +266,17 @@ def exact_flat(dp, modes, out, classify, relabel: bool = False, S: float = 0.0) 
         return out
     mf = MixedForm.on_obstacle(dp)
     floor = mf.zero_floor if mf.has_load else 0.0
-    residual, _ = certify_contact(dp, modes, u0, None, rows, levels, floor)
+    residual, lam = certify_contact(dp, modes, u0, None, rows, levels, floor)
     if not passes(residual):
         return out
+
+    # The second-order conditions decide first where they can (whole_beam): pressed
+    # by a small load, the flat beam is a strict minimum whose basin can be
+    # narrower than the probes' 1e-8 S (P2 pressed at gap 0 by 10 N/m, two modes:
+    # listed unstable and `optimal`, a review; independently stable).
+    decided = None
+    if lam is not None and len(u0) <= MAX_UNKNOWNS:
+        decided = second_order(dp, u0, rows, rows @ u0 - levels, np.asarray(lam, float), 0.0)
     top = max((float(np.max(np.abs(e.w))) for e in out if e is not None), default=0.0)
     near = max(floor * dp.W, 1e-9 * top)
     # (or within the searches' merging distance (MERGE S) of s = 0: a one-mode zero
@@ -285,11 +294,14 @@ def exact_flat(dp, modes, out, classify, relabel: bool = False, S: float = 0.0) 
         keep.w, keep.slope, keep.energy = zeros, zeros.copy(), energy
         keep.amplitudes, keep.residual, keep.status = [0.0] * modes.k, 0.0, "optimal"
         keep.whole_beam = False
-        if relabel or len({e.stable for e in flat}) > 1:
+        if decided is not None:
+            keep.stable, keep.curvature = bool(decided), math.nan
+        elif relabel or len({e.stable for e in flat}) > 1:
             stable, curvature = classify(np.zeros(modes.k))
             keep.stable, keep.curvature = bool(stable), float(curvature)
         return [e for e in out if e is keep or all(e is not f for f in flat)]
-    stable, curvature = classify(np.zeros(modes.k))
+    stable, curvature = (decided, math.nan) if decided is not None else \
+        classify(np.zeros(modes.k))
     log.info("equilibria: the flat beam w = 0, an equilibrium, added (%s)",
              "stable" if stable else "unstable")
     return out + [Equilibrium(energy, bool(stable), [0.0] * modes.k, dp.x.copy(), zeros,

@@ -55,8 +55,8 @@ from ..tolerances import TOUCH_TOL
 from .certificate import psi_certificate
 from .equilibrium import Equilibrium, same_point
 
-__all__ = ["polish_equilibrium", "polisher", "settle", "eig_tol", "MAX_UNKNOWNS", "MOVE",
-           "EIG_TOL"]
+__all__ = ["polish_equilibrium", "polisher", "settle", "second_order", "eig_tol",
+           "MAX_UNKNOWNS", "MOVE", "EIG_TOL"]
 
 log = logging.getLogger(__name__)
 
@@ -183,7 +183,7 @@ def polish_equilibrium(dp, modes, u, rows, levels):
         log.debug("whole-beam polish: the certificate fails (%s, least gap %.3g of the size)",
                   residual, float(np.min(gap)) / size)
         return None
-    stable = _stability(dp, x, rows, gap, lam, size)
+    stable = second_order(dp, x, rows, gap, lam, size)
     if stable is None:
         log.debug("whole-beam polish: the stability is undecided")
         return None
@@ -296,8 +296,11 @@ def _same_beam(a, b) -> bool:
                 and np.max(np.abs(a.slope - b.slope)) <= 1e-9 * tilt)
 
 
-def _stability(dp, x, rows, gap, lam, size):
-    """True (strict local minimum), False (unstable) or None (undecided): see the notes."""
+def second_order(dp, x, rows, gap, lam, size):
+    """The stability of the KKT point ``x`` (multipliers ``lam``, gaps ``gap``, rows
+    touching within ``TOUCH_TOL`` of ``size``) from the second-order conditions:
+    True (a strict local minimum), False (unstable) or None (undecided); see the
+    module's notes."""
     H = dp.hessian(x)
     H = H.toarray() if hasattr(H, "toarray") else np.asarray(H)
     K = dp.K.toarray() if hasattr(dp.K, "toarray") else np.asarray(dp.K)
