@@ -32,7 +32,7 @@ from scipy.sparse.csgraph import connected_components
 from .equilibrium import MERGE, same_point
 
 __all__ = ["near_flat", "clusters", "own_scale", "peak_amplitude", "NEAR_FLAT",
-           "CLUSTER_STEPS", "CLUSTER_GRID", "MAX_CLUSTERS", "OWN_BOX"]
+           "CLUSTER_STEPS", "CLUSTER_GRID", "MAX_CLUSTERS", "OWN_BOX", "SAME_BEAM"]
 
 log = logging.getLogger(__name__)
 
