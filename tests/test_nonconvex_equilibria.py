@@ -425,11 +425,8 @@ def test_a_saddle_too_low_for_the_scenes_slices_is_found_in_the_flat_beams_own_s
     of the buckled beam's size and stationary in its own scale (polished on the
     whole beam; resolved in the rescaled problem's units only, it was 6.6e-9)."""
     from test_equilibria_obstacle_campaign import _checked
-    scene = Scene.from_dict({
-        "beam": {"model": "gao", "supports": "P2", "length": 1.0, "E": 2.1e11, "nu": 0.3,
-                 "half_thickness": 0.1, "width": 1.0},
-        "load": {"q": -372471.13386204804, "axial": 8269963467.228407},
-        "mesh": {"elements": 9}, "obstacle": {"gap": 0.0}})
+    scene = Scene.from_dict(scene_dict("P2", q=-372471.13386204804, axial=8269963467.228407,
+                                       obstacle=0.0, elements=9))
     eqs = equilibria(scene)
     assert all(e.status == "optimal" for e in eqs)
     assert [e.stable for e in eqs][:2] == [True, True] and not eqs[-1].stable
@@ -472,11 +469,8 @@ def test_a_flat_beam_pressed_by_a_tiny_load_is_a_stable_equilibrium():
     1e-8 S.  Its label now comes from the second-order conditions, and every entry
     is independently a KKT point of its stated stability."""
     from test_equilibria_obstacle_campaign import _checked
-    scene = Scene.from_dict({
-        "beam": {"model": "gao", "supports": "P2", "length": 1.0, "E": 2.1e11, "nu": 0.3,
-                 "half_thickness": 0.1, "width": 1.0},
-        "load": {"q": -10.0, "axial": 8269963467.228407},
-        "mesh": {"elements": 9}, "obstacle": {"gap": 0.0}})
+    scene = Scene.from_dict(scene_dict("P2", q=-10.0, axial=8269963467.228407, obstacle=0.0,
+                                       elements=9))
     eqs = equilibria(scene)
     flat = [e for e in eqs if not np.any(e.w)]
     assert len(flat) == 1 and flat[0].stable
@@ -494,11 +488,8 @@ def test_near_flat_saddles_of_a_degenerate_contact_are_listed_once():
     are one now, every entry `optimal` and independently a KKT point of its stated
     stability."""
     from test_equilibria_obstacle_campaign import _checked, _same
-    scene = Scene.from_dict({
-        "beam": {"model": "gao", "supports": "P1", "length": 1.0, "E": 2.1e11, "nu": 0.3,
-                 "half_thickness": 0.1, "width": 1.0},
-        "load": {"q": -2e6, "axial": 14018979251.896896},
-        "mesh": {"elements": 12}, "obstacle": {"gap": 0.0}})
+    scene = Scene.from_dict(scene_dict("P1", q=-2e6, axial=14018979251.896896, obstacle=0.0,
+                                       elements=12))
     eqs = equilibria(scene)
     assert all(e.status == "optimal" for e in eqs)
     assert not [(a.energy, b.energy) for i, a in enumerate(eqs) for b in eqs[:i]
