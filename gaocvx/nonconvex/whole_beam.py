@@ -55,7 +55,7 @@ from ..tolerances import TOUCH_TOL
 from .certificate import psi_certificate
 from .equilibrium import Equilibrium, same_point
 
-__all__ = ["polish_equilibrium", "polisher", "settle", "second_order", "eig_tol",
+__all__ = ["polish_equilibrium", "polisher", "settle", "same_beam", "second_order", "eig_tol",
            "MAX_UNKNOWNS", "MOVE", "EIG_TOL"]
 
 log = logging.getLogger(__name__)
@@ -280,7 +280,7 @@ def settle(dp, polish, eqs, S, modes=None) -> list:
             if p is not None and same_point(p.amplitudes, e.amplitudes, S):
                 e = p
         if e is not None and e.whole_beam and any(
-                o.whole_beam and _same_beam(o, e) for o in out if o is not None):
+                o.whole_beam and same_beam(o, e) for o in out if o is not None):
             continue
         if e is not None and e.whole_beam and modes is not None:
             u = dp.from_physical(e.w, e.slope)
@@ -289,11 +289,13 @@ def settle(dp, polish, eqs, S, modes=None) -> list:
     return out
 
 
-def _same_beam(a, b) -> bool:
+def same_beam(a, b, tol: float = 1e-9) -> bool:
+    """Whether equilibria ``a`` and ``b`` are one beam: deflections and slopes within
+    ``tol`` of the larger of each."""
     top = max(float(np.max(np.abs(a.w))), float(np.max(np.abs(b.w))), 1e-300)
     tilt = max(float(np.max(np.abs(a.slope))), float(np.max(np.abs(b.slope))), 1e-300)
-    return bool(np.max(np.abs(a.w - b.w)) <= 1e-9 * top
-                and np.max(np.abs(a.slope - b.slope)) <= 1e-9 * tilt)
+    return bool(np.max(np.abs(a.w - b.w)) <= tol * top
+                and np.max(np.abs(a.slope - b.slope)) <= tol * tilt)
 
 
 def second_order(dp, x, rows, gap, lam, size):

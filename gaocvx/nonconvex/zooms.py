@@ -30,6 +30,7 @@ import numpy as np
 from scipy.sparse.csgraph import connected_components
 
 from .equilibrium import MERGE, same_point
+from .whole_beam import same_beam
 
 __all__ = ["near_flat", "clusters", "own_scale", "peak_amplitude", "NEAR_FLAT",
            "CLUSTER_STEPS", "CLUSTER_GRID", "MAX_CLUSTERS", "OWN_BOX", "SAME_BEAM"]
@@ -304,11 +305,4 @@ def _one_beam(eqs, R) -> list:
 
     polished = [e for e in eqs if e.whole_beam and inside(e)]
     return [e for e in eqs if e.whole_beam or not inside(e) or not any(
-        p.stable == e.stable and _near(e, p) for p in polished)]
-
-
-def _near(a, b) -> bool:
-    top = max(float(np.max(np.abs(a.w))), float(np.max(np.abs(b.w))), 1e-300)
-    tilt = max(float(np.max(np.abs(a.slope))), float(np.max(np.abs(b.slope))), 1e-300)
-    return bool(np.max(np.abs(a.w - b.w)) <= SAME_BEAM * top
-                and np.max(np.abs(a.slope - b.slope)) <= SAME_BEAM * tilt)
+        p.stable == e.stable and same_beam(e, p, SAME_BEAM) for p in polished)]
