@@ -53,6 +53,7 @@ from ..scene import check_solve_arguments, numbers_of, whole
 from .bounds import check_bounded, equilibrium_box, estimate_boxes, zoom_boxes
 from .contours import sampled_roots
 from .equilibrium import Equilibrium, check_has_minimum, check_mountain_pass, same_point
+from .images import complete_beams
 from .obstacle_checks import check_contact, exact_flat, global_minimisers
 from .whole_beam import polisher, settle
 from .zooms import own_scale
@@ -245,6 +246,9 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
             out = sorted(settle(dp, polish, exact_flat(dp, modes, out, classify, S=S), S,
                                 modes),
                          key=lambda e: e.energy)
+    if obstacle and None not in out:
+        # the mirror image of each beam polished on the whole beam (:mod:`.images`)
+        out = sorted(complete_beams(dp, polisher(dp, modes), out), key=lambda e: e.energy)
     if out and all(e is not None for e in out):
         for e in out:
             parts = dp.energy_parts(dp.from_physical(e.w, e.slope))
