@@ -498,6 +498,34 @@ def test_near_flat_saddles_of_a_degenerate_contact_are_listed_once():
     _checked(scene, eqs)
 
 
+def test_a_beam_lifted_within_its_first_element_only_is_certified():
+    """A campaign scene (seed 7104, draw 21): P4 at gap 0, 1.000008 P_bar_h, under a
+    load table pulling up at x = 0 and pressing elsewhere, 16 elements.  The beam
+    rests on the obstacle but lifts within its first element (1.1e-12 m, an end
+    slope of 1.2e-10; every node at w = 0).  Its one entry was `inaccurate`: the
+    slice's resting rows were 1e-17 off, 1e-5 of the beam, the whole-beam polish
+    never settled, and the certificate measured the beam by its nodes alone.  Now
+    it is `optimal`, independently a KKT point of its stability and stationary in
+    its own scale (1e-12 m)."""
+    from nonconvex_independent import Discrete
+    from test_equilibria_obstacle_campaign import _checked
+    table = [[0.0, 16045.57187146055], [0.08068383670544699, -23687.93160202975],
+             [0.9388322908135894, -42819.87895778942], [1.0, -4330.486687462202]]
+    scene = Scene.from_dict(scene_dict("P4", q=table, axial=1168012275.4302838, obstacle=0.0,
+                                       elements=16))
+    eqs = equilibria(scene)
+    assert [(e.stable, e.status) for e in eqs] == [(True, "optimal")]
+    e = eqs[0]
+    assert np.max(np.abs(e.w)) < 1e-20 and 1e-10 < e.slope[0] < 2e-10
+    _checked(scene, eqs)
+    en = Discrete(scene, 1e-12)
+    x = en.from_nodal(e.w, e.slope)
+    _, g0 = en(np.zeros(en.n))
+    floor = 1e-6 * float(np.linalg.norm(np.linalg.solve(np.linalg.cholesky(en.stiffness()), g0)))
+    assert en.norm_K(x) > floor
+    assert en.kkt(x)["stationarity"] <= 1e-9
+
+
 @pytest.mark.slow
 def test_every_equilibrium_of_a_symmetric_scene_is_listed_with_its_mirror_image():
     """A campaign rerun: P1 pressed at gap 0 by a uniform load, 9 elements, two

@@ -91,7 +91,7 @@ def psi_certificate(dp, modes, u, lam, rows, levels=None, floor: float = 0.0) ->
     out = {"stationarity": math.sqrt(max(float(y @ y), 0.0)) / scale}
     if lam is not None:
         gap = rows @ u - levels
-        size = _size(dp, u, floor)
+        size = _size(dp, u, floor, rows)
         lam_scale = float(np.max(np.abs(lam), initial=0.0)) or 1.0
         out.update(feasibility=float(max(-np.min(gap, initial=0.0), 0.0) / size),
                    dual=float(max(-np.min(lam, initial=0.0), 0.0) / lam_scale),
@@ -99,9 +99,16 @@ def psi_certificate(dp, modes, u, lam, rows, levels=None, floor: float = 0.0) ->
     return out
 
 
-def _size(dp, u, floor):
-    """The answer's largest nodal |w|, at least ``floor``."""
-    return max(float(np.max(np.abs(u[dp._w_rows()]), initial=0.0)), floor, 1e-300)
+def _size(dp, u, floor, rows):
+    """The answer's largest |w| at the nodes and at the obstacle rows' points, at least
+    ``floor``.
+
+    (The rows' points too: a beam resting on the obstacle but lifted 1.1e-12 m
+    within its first element, its nodes at 1e-28 m, was measured against its
+    round-off at the nodes -- P4 near P_bar_h under an upward load at one end.)
+    """
+    return max(float(np.max(np.abs(u[dp._w_rows()]), initial=0.0)),
+               float(np.max(np.abs(rows @ u), initial=0.0)), floor, 1e-300)
 
 
 def _psi_factor(dp, modes, u):
@@ -141,7 +148,7 @@ def contact_multipliers(dp, modes, u, rows, levels, floor: float = 0.0) -> list:
         can balance the load).
     """
     gap = rows @ u - levels
-    act = np.flatnonzero(gap <= TOUCH_TOL * _size(dp, u, floor))
+    act = np.flatnonzero(gap <= TOUCH_TOL * _size(dp, u, floor, rows))
     if len(act) == 0:
         return [np.zeros(rows.shape[0])]
     g = dp.gradient(u)
