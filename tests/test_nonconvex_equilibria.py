@@ -526,6 +526,26 @@ def test_a_beam_lifted_within_its_first_element_only_is_certified():
     assert en.kkt(x)["stationarity"] <= 1e-9
 
 
+def test_a_contact_edge_many_rows_from_the_slices_is_polished():
+    """A campaign scene (seed 7103, draw 3): P4 in a channel at gap 0 near P_bar_h
+    under a load table pulling up at x = 0, 32 elements.  A stable equilibrium lifted
+    5.7e-9 m over 20 elements was `inaccurate`: its slice's round-off counted rows
+    beyond the contact's edge as touching, and the whole-beam polish, moving the
+    edge one row per change of its active set, stopped at ten changes.  Every entry
+    is now `optimal` and independently a KKT point of its stability."""
+    from test_equilibria_obstacle_campaign import _checked
+    table = [[0.0, 92.41252858178791], [0.4852306250794787, -102.450706346255],
+             [0.6975129358182318, -591.9251008196595]]
+    beam = {"length": 0.6975129358182318, "nu": 0.4357664130410635,
+            "half_thickness": 0.016052610241871875}
+    data = scene_dict("P4", q=table, axial=10447799.33590792, elements=32, **beam)
+    scene = Scene.from_dict({**data, "obstacle": {"gap": 0.0, "gap_above": 0.02161046482797673}})
+    eqs = equilibria(scene)
+    assert all(e.status == "optimal" for e in eqs) and sum(e.stable for e in eqs) == 2
+    assert any(e.stable and 5e-9 < np.max(np.abs(e.w)) < 6e-9 for e in eqs)
+    _checked(scene, eqs)
+
+
 @pytest.mark.slow
 def test_every_equilibrium_of_a_symmetric_scene_is_listed_with_its_mirror_image():
     """A campaign rerun: P1 pressed at gap 0 by a uniform load, 9 elements, two
