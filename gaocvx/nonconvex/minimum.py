@@ -84,6 +84,10 @@ MAX_NODES = 4000
 # scene_energy): an answer whose energy is far below it (a beam pressed flat onto
 # an obstacle: w = 0, energy 0) has its gap measured against this instead.
 ENERGY_FLOOR = 1.0
+# A negative gap (a bound above the answer) is measured against the answer's own
+# energy, at least this fraction of the scene's (below it, the answer is the
+# scene's round-off: a beam lying flat).
+OWN_FLOOR = 1e-6
 # The node programs are dense (A_rho is banded plus rank k, its factor dense), and
 # their model of the quadratic part carries round-off growing with N (measured at
 # nonconvex.md's example: 1e-12 of the energy at 64 elements, 1.2e-8 at 128, where
@@ -368,6 +372,12 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     gap = upper - out.lower
     # The gap is the certificate, however the search ended (the node limit too).
     ok = -GAP_TOL * scale <= gap <= GAP_TOL * scale and out.failed == 0 and modes.verified
+    # A bound above the answer is a node program less accurate than its margin: not
+    # within GAP_TOL of the answer's own energy, the answer is not certified either
+    # (a P2 beam held 3.7e-5 m above an obstacle: bounds 1.2e-6 J above the answer,
+    # 3.2e-10 of the scene's energy but 2.4e-8 of the answer's -- a random campaign)
+    own = sum(abs(v) for v in parts.values())
+    ok = ok and gap >= -GAP_TOL * max(own, OWN_FLOOR * floor)
     how = (f"branch and bound: {out.nodes} node programs" if out.certificate != "dual bound"
            else "the Gao term's tangents (dual bound)")
     notes = [f"{how}, certified gap {gap * dp.E0:.3g} J ({gap / scale:.2g} of the energy scale)"]
