@@ -247,7 +247,9 @@ def certify_contact(prog, z, lam, floor: float = 0.0) -> tuple:
 
 
 def _size(mf, z, floor):
-    """The answer's largest nodal |w|, at least ``floor`` (as :func:`.certificate._size`)."""
+    """The answer's largest nodal |w|, at least ``floor`` (:func:`.certificate._size`
+    also takes |w| at the obstacle rows' points, for the whole-beam polish's beams
+    lifted within one element; the fast path's answers are measured at the nodes)."""
     return max(float(np.max(np.abs(mf.absolute(z)[mf.w_index]), initial=0.0)), floor, 1e-300)
 
 

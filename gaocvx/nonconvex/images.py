@@ -1,24 +1,23 @@
-"""Mirror images (x -> L - x) of two-mode equilibria (:mod:`.stationary2`).
+"""Mirror images (x -> L - x) of equilibria (:mod:`.stationary2`, :mod:`.stationary`).
 
 Where mesh and supports are symmetric (:func:`.polish.reflections`), the mirror
 image of an equilibrium is one of the same energy and stability if the load is
-symmetric too.  The search uses images three times: as seeds where an image was
-not found (:func:`seeds`), to settle an entry that is not ``optimal`` where it
-stands for the image of an ``optimal`` one (:func:`settle_twins`), and, last, to
-try once more the image of an ``optimal`` entry that is still not listed
-(:func:`complete_pairs`).  Last, after every search (one mode or two), the
-mirrored beam of each entry polished on the whole beam is polished in turn
-(:func:`complete_beams`).  None assumes the load symmetric: a seed is only a
-seed, and an image is listed only where it passes the search's own tests.
+symmetric too.  The two-mode search uses images three times: as seeds where an
+image was not found (:func:`seeds`), to settle an entry that is not ``optimal``
+where it stands for the image of an ``optimal`` one (:func:`settle_twins`), and
+to try once more the image of an ``optimal`` entry that is still not listed
+(:func:`complete_pairs`).  After every search with an obstacle (one mode or
+two), the mirrored beam of each entry polished on the whole beam is polished in
+turn (:func:`complete_beams`).  None assumes the load symmetric: a seed is only
+a seed, and an image is listed only where it passes the search's own tests.
 """
 
 from __future__ import annotations
 
 import logging
+from types import SimpleNamespace
 
 import numpy as np
-
-from types import SimpleNamespace
 
 from .equilibrium import MERGE, same_point
 from .polish import reflections

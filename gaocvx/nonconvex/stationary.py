@@ -184,6 +184,7 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         return np.asarray(ranged.smin, float), np.asarray(ranged.smax, float)
 
     prog = program(dp)
+    polish = polisher(dp, modes)
     # (with a bonded foundation the modes' lambda_1 is that of K + c M: no bound
     # of u'K u / t, so none is used; equilibrium_box counts the foundation itself)
     lam1 = 0.0 if getattr(dp, "bilateral", False) else float(modes.lam[0]) * (1.0 - 1e-9)
@@ -231,7 +232,6 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                                                      if obstacle else [])
         points = np.concatenate([np.asarray(seeds, float) / dp.W]
                                 + [np.linspace(a[0], b[0], grid) for a, b in boxes])
-        polish = polisher(dp, modes)
         out = _find(dp, prog, S, points, grid, float(lo[0]), float(hi[0]),
                     scene_energy(dp, modes), polish)
         if obstacle:
@@ -248,7 +248,7 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                          key=lambda e: e.energy)
     if obstacle and None not in out:
         # the mirror image of each beam polished on the whole beam (:mod:`.images`)
-        out = sorted(complete_beams(dp, polisher(dp, modes), out), key=lambda e: e.energy)
+        out = sorted(complete_beams(dp, polish, out), key=lambda e: e.energy)
     if out and all(e is not None for e in out):
         for e in out:
             parts = dp.energy_parts(dp.from_physical(e.w, e.slope))

@@ -70,8 +70,9 @@ MAX_UNKNOWNS = 1000
 #: slices are accurate relative to the scene, not to the beam (the saddle above:
 #: 5.3e-5 from the search's warm-started slice, 5e-11 from a slice solved afresh).
 MOVE = 1e-3
-#: Gaps (in the scene's units, those of the rescaled problem) within which a slice's
-#: row cannot be told from touching: its accuracy is relative to the scene.
+#: Gaps (in the units of the problem polished: the scene's, or a second search's
+#: own) within which a slice's row cannot be told from touching: its accuracy is
+#: relative to that problem's scale.
 SCENE_TOUCH = 1e-12
 #: Generalised eigenvalues ``μ`` (relative to ``K``) and multipliers (relative to
 #: the largest) within this of zero are taken as zero; eigenvalues within
