@@ -48,7 +48,7 @@ from ..certificate import certify
 from ..tolerances import TOUCH_TOL, complementarity
 
 __all__ = ["psi_certificate", "contact_multipliers", "certify_contact", "certify_answer",
-           "modes_size"]
+           "modes_size", "beam_size"]
 
 
 def psi_certificate(dp, modes, u, lam, rows, levels=None, floor: float = 0.0) -> dict:
@@ -99,16 +99,21 @@ def psi_certificate(dp, modes, u, lam, rows, levels=None, floor: float = 0.0) ->
     return out
 
 
-def _size(dp, u, floor, rows):
-    """The answer's largest |w| at the nodes and at the obstacle rows' points, at least
-    ``floor``.
+def beam_size(dp, u, rows) -> float:
+    """The beam's largest |w| at the nodes and at the obstacle rows' points (``rows``:
+    :func:`.node.obstacle_rows`, whose rows are ``±w`` at points; 0 for the flat beam).
 
     (The rows' points too: a beam resting on the obstacle but lifted 1.1e-12 m
     within its first element, its nodes at 1e-28 m, was measured against its
     round-off at the nodes -- P4 near P_bar_h under an upward load at one end.)
     """
     return max(float(np.max(np.abs(u[dp._w_rows()]), initial=0.0)),
-               float(np.max(np.abs(rows @ u), initial=0.0)), floor, 1e-300)
+               float(np.max(np.abs(rows @ u), initial=0.0)))
+
+
+def _size(dp, u, floor, rows):
+    """:func:`beam_size`, at least ``floor``."""
+    return max(beam_size(dp, u, rows), floor, 1e-300)
 
 
 def _psi_factor(dp, modes, u):

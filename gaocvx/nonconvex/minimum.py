@@ -366,7 +366,8 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     z, residual, lam = (certified if certified is not None and best_u is chosen
                         else answer_certificate(dp, prog, mf, best_u, lam))
     parts = mf.energy_parts(z)
-    scale = max(sum(abs(v) for v in parts.values()), floor, 1e-300)
+    own = sum(abs(v) for v in parts.values())
+    scale = max(own, floor, 1e-300)
     upper = sum(parts.values())
     # (a negative gap would be a bound above an admissible energy: reported as is)
     gap = upper - out.lower
@@ -376,7 +377,6 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     # within GAP_TOL of the answer's own energy, the answer is not certified either
     # (a P2 beam held 3.7e-5 m above an obstacle: bounds 1.2e-6 J above the answer,
     # 3.2e-10 of the scene's energy but 2.4e-8 of the answer's -- a random campaign)
-    own = sum(abs(v) for v in parts.values())
     ok = ok and gap >= -GAP_TOL * max(own, OWN_FLOOR * floor)
     how = (f"branch and bound: {out.nodes} node programs" if out.certificate != "dual bound"
            else "the Gao term's tangents (dual bound)")

@@ -55,7 +55,7 @@ import scipy.sparse.linalg as spla
 
 from ..certificate import passes
 from ..tolerances import TOUCH_TOL
-from .certificate import psi_certificate
+from .certificate import beam_size, psi_certificate
 from .equilibrium import Equilibrium, same_point
 
 __all__ = ["polish_equilibrium", "polisher", "settle", "same_beam", "second_order", "eig_tol",
@@ -155,8 +155,7 @@ def polish_equilibrium(dp, modes, u, rows, levels):
     u = np.asarray(u, float)
     n = len(u)
     rows = sp.csr_matrix(rows)
-    size = max(float(np.max(np.abs(u[dp._w_rows()]), initial=0.0)),
-               float(np.max(np.abs(rows @ u), initial=0.0)))
+    size = beam_size(dp, u, rows)
     if not (math.isfinite(size) and size > 0.0):
         return None     # (the flat beam itself: obstacle_checks.exact_flat)
     if n > MAX_UNKNOWNS:
