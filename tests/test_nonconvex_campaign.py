@@ -91,6 +91,27 @@ def test_a_bound_above_the_answer_is_no_certificate():
     assert rec["status"] == "optimal", rec.get("message")
 
 
+def test_a_beam_pressed_flat_just_above_the_limit_is_certified_as_w_0():
+    """A random campaign (seed 8801, draw 133): P1 in a channel at gap 0, pressed by
+    2.6e6 N/m at 1.0000017 P_bar_h, 8 elements.  Both node programs' answers were
+    zero to round-off and failed their certificate, whose metric has the margin
+    p - lambda_1 along the first mode (the dense one 4e-13 m inside the obstacle,
+    its energy -5.7e-7 J below its own bound): `inaccurate`.  The flat beam w = 0,
+    admissible and certified, is now the answer; the independent checker finds a
+    KKT point and nothing lower."""
+    from campaign import Case
+    data = {"beam": {"model": "gao", "supports": "P1", "length": 1.3163345518075953,
+                     "E": 2.1e11, "nu": 0.37017998938920277,
+                     "half_thickness": 0.03175511362843908, "width": 1.0},
+            "load": {"q": -2557368.130017543, "axial": 86426639.68894446},
+            "mesh": {"elements": 8},
+            "obstacle": {"gap": 0.0, "gap_above": 0.047757134097864994}}
+    rec = run_case(Case(data, ("P1", "channel", "near-limit"), "8801:133"), starts=12)
+    assert not rec["violations"], rec["violations"]
+    assert rec["status"] == "optimal", rec.get("message")
+    assert rec["energy"] == 0.0
+
+
 def test_untouched_channel_is_certified():
     data = {"beam": {"model": "gao", "supports": "P2", "length": 2.8216664003911887, "E": 2.1e11,
                      "nu": 0.21420910778984964, "half_thickness": 0.06217198969486908,

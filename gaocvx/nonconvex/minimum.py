@@ -22,7 +22,8 @@ Steps (nonconvex.md):
    the full energy; the energy only goes down (with an obstacle, up to the
    polish's slack), so the certificate stands; where the polished point fails
    its certificate and the search's best passes, the best stays
-   (:func:`.polish.search_best`);
+   (:func:`.polish.search_best`); where neither passes, the flat beam ``w = 0``
+   if admissible, no higher and certified (:func:`.polish.flat_answer`);
 8. other minimisers: every other group of leaves whose lower bound lies
    within the gap of the best is searched the same way; one within the
    tolerance of the best energy makes the minimiser not unique;
@@ -60,7 +61,8 @@ from .bnb import branch_and_bound
 from .bounds import amplitude_box, check_bounded, load_constant, mode_amplitudes
 from .modes import unstable_modes
 from .node import NodeProgram
-from .polish import answer_certificate, feasible_energy, polish, search_best, to_mixed
+from .polish import (answer_certificate, feasible_energy, flat_answer, polish, search_best,
+                     to_mixed)
 
 __all__ = ["solve_global", "solve_certified", "GAP_TOL", "GAP_TARGET", "MAX_ELEMENTS",
            "MAX_MODES", "to_mixed", "rescale_for"]
@@ -354,6 +356,14 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     kept, certified = search_best(dp, prog, mf, out, best_u, lam, 0.5 * GAP_TOL * scale)
     if kept:
         best_s, best_u, lam = out.s, out.u, out.lam
+    if certified is None:
+        certified = answer_certificate(dp, prog, mf, best_u, lam)
+    if not passes(certified[1]):
+        # (a beam pressed flat at gap 0 just above the limit: its answer, zero to
+        # round-off, fails where w = 0 itself passes -- polish.flat_answer)
+        flat = flat_answer(dp, prog, mf, dp.energy(best_u) + 0.5 * GAP_TOL * scale)
+        if flat is not None:
+            best_s, best_u, lam, certified = np.zeros(k), np.zeros(dp.n), flat[2], flat
     chosen = best_u
     best_e = dp.energy(best_u)
     tol = max(out.gap, GAP_TARGET * scale)
@@ -362,8 +372,8 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None):
     (best_e, best_u, best_s, lam), alternatives = other_minimisers(
         dp, prog, out, (best_e, best_u, best_s, lam), lo, hi, tol)
 
-    # (search_best's certificate holds unless another minimiser replaced the answer)
-    z, residual, lam = (certified if certified is not None and best_u is chosen
+    # (the certificate above holds unless another minimiser replaced the answer)
+    z, residual, lam = (certified if best_u is chosen
                         else answer_certificate(dp, prog, mf, best_u, lam))
     parts = mf.energy_parts(z)
     own = sum(abs(v) for v in parts.values())

@@ -19,10 +19,10 @@ import scipy.optimize as so
 
 from ..mixed import MixedForm
 from ..certificate import passes
-from .certificate import certify_answer, contact_polish
+from .certificate import certify_answer, certify_contact, contact_polish
 
 __all__ = ["to_mixed", "polish", "feasible_energy", "reflections", "answer_certificate",
-           "search_best", "SLACK"]
+           "search_best", "flat_answer", "SLACK"]
 
 log = logging.getLogger(__name__)
 
@@ -268,3 +268,36 @@ def search_best(dp, prog, mf, out, polished, lam, slack) -> tuple:
         return False, mine
     theirs = answer_certificate(dp, prog, mf, out.u, out.lam)
     return (True, theirs) if passes(theirs[1]) else (False, mine)
+
+
+def flat_answer(dp, prog, mf, bound):
+    """The flat beam ``w = 0`` as the answer, where it is admissible, its energy at most
+    ``bound`` (in ``dp``'s unit) and it passes the certificate; else None.
+
+    Only with an obstacle and up to :data:`.whole_beam.MAX_UNKNOWNS` free DOFs (the
+    dense certificate, :func:`.certificate.certify_contact`, as for
+    :func:`.obstacle_checks.exact_flat`).  A beam pressed flat onto an obstacle at
+    gap 0 just above ``P_bar_h`` is measured in a metric whose margin along the
+    first mode is ``p - lambda_1``: there the search's answers, zero to round-off
+    (9.6e-18 of W), failed it (the fast path's solve not resolving the step; the
+    dense programs' polished point 1e-4 of the floor inside the obstacle), while
+    ``w = 0`` itself, its contact forces recomputed on the touching rows, passes
+    (a P1 beam in a channel at gap 0 at 1.0000017 ``P_bar_h``, a random campaign).
+
+    Returns
+    -------
+    tuple or None
+        ``(z, residual, lam)`` as :func:`answer_certificate`.
+    """
+    from .whole_beam import MAX_UNKNOWNS
+
+    if dp.contact != "obstacle" or dp.n > MAX_UNKNOWNS:
+        return None
+    u0 = np.zeros(dp.n)
+    if np.min(prog.rows @ u0 - prog.levels, initial=0.0) < 0 or not dp.energy(u0) <= bound:
+        return None
+    floor = mf.zero_floor if mf.has_load else 0.0
+    residual, lam = certify_contact(dp, prog.modes, u0, None, prog.rows, prog.levels, floor)
+    if not passes(residual):
+        return None
+    return mf.on_manifold(to_mixed(mf, u0)), residual, lam
