@@ -149,3 +149,21 @@ def test_the_stability_threshold_on_a_fine_mesh_exceeds_the_eigenvalues_round_of
     tol = eig_tol(480)
     assert 5 * spread <= tol, (values, tol)
     assert all(v < -tol for v in values)
+
+
+def test_an_active_set_met_again_ends_the_polish(monkeypatch):
+    # -u^2/2 - u over u >= 0 has no KKT point: free, Newton goes to u = -1 (the row is
+    # added); held, u = 0 pulls with multiplier -1 (the row is dropped), and the set
+    # is the first one again.  The polish stops there, after two Newton solves,
+    # instead of going round MAX_CHANGES times.
+    import gaocvx.nonconvex.whole_beam as wb
+
+    dp, _ = _quadratic([[-1.0]], [1.0])
+    calls = []
+    newton = wb._newton
+    monkeypatch.setattr(wb, "_newton", lambda *a: calls.append(list(a[-1])) or newton(*a))
+    rows = sp.csr_matrix([[1.0]])
+    x, lam = wb._active_set(dp, np.array([0.5]), rows, np.zeros(1), [], 1.0)
+    assert x is None and lam is None
+    assert calls == [[], [0]]
+    assert wb.MAX_CHANGES > 2
