@@ -531,6 +531,28 @@ def test_one_mode_flat_beam_at_gap_zero_in_a_channel_is_optimal():
     assert [(e.stable, e.status) for e in eqs] == [(True, "optimal")]
 
 
+def test_one_mode_lists_no_fake_edge_where_one_slice_failed():
+    """A random campaign (seed 8801, draw 133): P1 pressed flat in a channel at gap 0
+    at 1.0000017 P_bar_h, 8 elements.  One slice inside the admissible range failed
+    (warm from the flat beam's and cold), the bisections on both sides of it made
+    it an edge, and that edge was listed as a stable `inaccurate` entry that is
+    independently no equilibrium.  The failed slice is now solved again from the
+    bisection's next to it: the list is the flat beam alone, independently a
+    stable KKT point."""
+    from gaocvx import Scene
+    scene = Scene.from_dict({
+        "beam": {"model": "gao", "supports": "P1", "length": 1.3163345518075953, "E": 2.1e11,
+                 "nu": 0.37017998938920277, "half_thickness": 0.03175511362843908,
+                 "width": 1.0},
+        "load": {"q": -2557368.130017543, "axial": 86426639.68894446},
+        "mesh": {"elements": 8},
+        "obstacle": {"gap": 0.0, "gap_above": 0.047757134097864994}})
+    eqs = equilibria(scene)
+    _checked(scene, eqs)
+    assert [(e.stable, e.status, float(np.max(np.abs(e.w)))) for e in eqs] == \
+        [(True, "optimal", 0.0)]
+
+
 def test_one_mode_says_when_slices_fail_inside_the_range(caplog):
     """A P4 beam in a channel 3.8e-6 m high (extreme-scale campaign): the slices
     fail over most of the admissible range, and the list must say that it may be

@@ -307,43 +307,6 @@ def _find(dp, prog, S, seeds, grid, lo, hi, floor, polish=None):
             cache[s] = (F, float(d[0]), u, ok)
         return cache[s]
 
-    inside = seeds[(seeds >= lo) & (seeds <= hi)]
-    if lo <= 0.0 <= hi:   # the trivial equilibrium of an unloaded beam
-        inside = np.r_[inside, 0.0]
-    pts = np.union1d(np.linspace(lo, hi, grid), inside)
-    vals = [(float(s), dF(float(s))) for s in pts]
-    # An obstacle bounds the amplitudes (a beam lying flat on it has the smallest):
-    # where the grid steps from infeasible to feasible, the boundary is found by
-    # bisection and sampled just inside, else a beam pressed onto the obstacle
-    # (a zero of F' right next to the boundary, where F' falls steeply) is missed.
-    extra, ends = [], []
-    for (a, va), (b, vb) in zip(vals[:-1], vals[1:]):
-        if math.isfinite(va[0]) != math.isfinite(vb[0]):
-            inside, outside = (b, a) if math.isfinite(vb[0]) else (a, b)
-            for _ in range(40):
-                mid = 0.5 * (inside + outside)
-                # (an inaccurate solve counts as outside: at gap 0 the fast slices
-                # accept a violation of 1e-9 as admissible but not accurate)
-                if math.isfinite(dF(mid)[0]) and dF(mid)[3]:
-                    inside = mid
-                else:
-                    outside = mid
-            extra.append((inside, dF(inside)))
-            ends.append((inside, outside))
-    sampled = [s for s, _ in vals]
-    vals = sorted([(s, v) for s, v in vals + extra if math.isfinite(v[0])],
-                  key=lambda item: item[0])
-    if not vals:
-        raise SceneError("scene", "no admissible amplitude of the buckling mode (no solve "
-                         "succeeded)")
-    scale = max(max(abs(v[0]) for _, v in vals), 1e-300)
-    # sign changes of F' and pairs of zeros between neighbouring grid points (a
-    # local extremum of F' near zero: the test was once sign * F' < 0 at the
-    # extremum, right for a minimum of F' only -- a flat beam held by a gap-0
-    # obstacle, a stable equilibrium, and the unstable one next to it were missed
-    # under a load table with unloaded ends)
-    roots = sampled_roots(lambda s: dF(s)[1], [s for s, _ in vals], [v[1] for _, v in vals], S)
-
     def at_an_end(t):
         # With one mode the admissible amplitudes are the interval [lo, hi] (the
         # linear program's, widened by fast_check.RANGE_PAD relative): F = inf
@@ -354,6 +317,55 @@ def _find(dp, prog, S, seeds, grid, lo, hi, floor, polish=None):
         from .fast_check import RANGE_PAD
         tol = max(1e-6 * (hi - lo), 4.0 * RANGE_PAD * (1.0 + max(abs(lo), abs(hi))))
         return t <= lo + tol or t >= hi - tol
+
+    inside = seeds[(seeds >= lo) & (seeds <= hi)]
+    if lo <= 0.0 <= hi:   # the trivial equilibrium of an unloaded beam
+        inside = np.r_[inside, 0.0]
+    sampled = [float(s) for s in np.union1d(np.linspace(lo, hi, grid), inside)]
+    for s in sampled:
+        dF(s)
+    # An obstacle bounds the amplitudes (a beam lying flat on it has the smallest):
+    # where the grid steps from infeasible to feasible, the boundary is found by
+    # bisection and sampled just inside, else a beam pressed onto the obstacle
+    # (a zero of F' right next to the boundary, where F' falls steeply) is missed.
+    extra, ends = [], []
+    for a, b in zip(sampled[:-1], sampled[1:]):
+        va, vb = dF(a), dF(b)   # (a's may have been solved again below)
+        if math.isfinite(va[0]) != math.isfinite(vb[0]):
+            inside, outside = (b, a) if math.isfinite(vb[0]) else (a, b)
+            for _ in range(40):
+                mid = 0.5 * (inside + outside)
+                # (an inaccurate solve counts as outside: at gap 0 the fast slices
+                # accept a violation of 1e-9 as admissible but not accurate)
+                if math.isfinite(dF(mid)[0]) and dF(mid)[3]:
+                    inside = mid
+                else:
+                    outside = mid
+            lost = b if math.isfinite(va[0]) else a
+            if not at_an_end(lost) and hasattr(prog, "cold"):
+                # A contact slice failed strictly inside the range: solved again, warm
+                # from the bisection's slice next to it (P1 pressed flat in a channel
+                # at gap 0 near P_bar_h: the slice at s = 0.0032, warm from the flat
+                # beam's and cold, stalled at a violation of 1.9e-9; the bisection on
+                # either side reached it, and its fake edge was listed as a stable
+                # `inaccurate` entry, no equilibrium -- a random campaign)
+                del cache[lost]
+                if math.isfinite(dF(lost)[0]):
+                    continue
+            extra.append((inside, dF(inside)))
+            ends.append((inside, outside))
+    vals = sorted([(s, v) for s, v in [(s, dF(s)) for s in sampled] + extra
+                   if math.isfinite(v[0])], key=lambda item: item[0])
+    if not vals:
+        raise SceneError("scene", "no admissible amplitude of the buckling mode (no solve "
+                         "succeeded)")
+    scale = max(max(abs(v[0]) for _, v in vals), 1e-300)
+    # sign changes of F' and pairs of zeros between neighbouring grid points (a
+    # local extremum of F' near zero: the test was once sign * F' < 0 at the
+    # extremum, right for a minimum of F' only -- a flat beam held by a gap-0
+    # obstacle, a stable equilibrium, and the unstable one next to it were missed
+    # under a load table with unloaded ends)
+    roots = sampled_roots(lambda s: dF(s)[1], [s for s, _ in vals], [v[1] for _, v in vals], S)
 
     failed = [t for t in sampled if not math.isfinite(dF(t)[0]) and not at_an_end(t)]
     if failed:
