@@ -553,6 +553,23 @@ def test_one_mode_lists_no_fake_edge_where_one_slice_failed():
         [(True, "optimal", 0.0)]
 
 
+def test_a_beam_pressed_flat_with_round_off_slopes_is_listed_once():
+    """A campaign at extreme loads (seed 8803, draw 113, the load times 1e6): P1 pressed
+    by 3.2e13 N/m onto an obstacle 5.5 cm below, 8 elements.  The polished beam and
+    its polished mirror image, the same beam, had nodal slopes of round-off of
+    opposite signs and were listed twice, the list `inaccurate` (two minima, no
+    saddle).  Once, independently a stable KKT point."""
+    from gaocvx import Scene
+    scene = Scene.from_dict({
+        "beam": {"model": "gao", "supports": "P1", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                 "half_thickness": 0.1, "width": 1.0},
+        "load": {"q": -31825387470628.84, "axial": 6279950420.348443},
+        "mesh": {"elements": 8}, "obstacle": {"gap": 0.054894505373142895}})
+    eqs = equilibria(scene)
+    _checked(scene, eqs)
+    assert [(e.stable, e.status) for e in eqs] == [(True, "optimal")]
+
+
 def test_one_mode_says_when_slices_fail_inside_the_range(caplog):
     """A P4 beam in a channel 3.8e-6 m high (extreme-scale campaign): the slices
     fail over most of the admissible range, and the list must say that it may be

@@ -24,7 +24,8 @@ def _dp(supports="P1"):
 
 
 def _eq(w, slope, polished=True, status="optimal"):
-    return NS(w=np.asarray(w, float), slope=np.asarray(slope, float), whole_beam=polished,
+    return NS(w=np.asarray(w, float), slope=np.asarray(slope, float),
+              x=np.linspace(0.0, 1.0, len(w)), whole_beam=polished,
               status=status, amplitudes=[0.0, 0.0], energy=0.0, stable=False)
 
 

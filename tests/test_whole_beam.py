@@ -167,3 +167,19 @@ def test_an_active_set_met_again_ends_the_polish(monkeypatch):
     assert x is None and lam is None
     assert calls == [[], [0]]
     assert wb.MAX_CHANGES > 2
+
+
+def test_one_beam_whose_slopes_are_round_off():
+    # A beam lying flat on an obstacle 5.5 cm below between pinned ends: its slopes at
+    # the nodes are round-off, of either sign from one polish to another.  They are
+    # measured against |w| over the length; slopes that differ by 1e-6 of that are not.
+    from gaocvx.nonconvex.whole_beam import same_beam
+    x = np.linspace(0.0, 1.0, 9)
+    w = np.r_[0.0, np.full(7, -0.0549), 0.0]
+    a = SimpleNamespace(x=x, w=w, slope=np.r_[0.0, np.full(7, 1.6e-15), 0.0])
+    b = SimpleNamespace(x=x, w=w.copy(), slope=-a.slope)
+    assert same_beam(a, b)
+    c = SimpleNamespace(x=x, w=w.copy(), slope=a.slope + 1e-6 * 0.0549)
+    assert not same_beam(a, c)
+    d = SimpleNamespace(x=x, w=w * (1.0 + 1e-6), slope=a.slope)
+    assert not same_beam(a, d)

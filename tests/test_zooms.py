@@ -29,6 +29,7 @@ def _problem():
 def _eq(stable, w, s, status="optimal", energy=0.0, W=3.0, polished=False):
     w = np.asarray(w, float)
     return NS(stable=stable, status=status, w=w, slope=np.r_[w[1:], 0.0] - w,
+              x=np.arange(len(w), dtype=float),
               amplitudes=list(s), W=W, energy=energy, whole_beam=polished)
 
 

@@ -161,7 +161,7 @@ def complete_beams(dp, polish, out) -> list:
     for e in [e for e in out if e is not None and e.whole_beam and e.status == "optimal"]:
         for r in reflections(dp, dp.from_physical(e.w, e.slope))[:1]:
             w, slope = dp.to_physical(r)
-            image = SimpleNamespace(w=w, slope=slope)
+            image = SimpleNamespace(w=w, slope=slope, x=e.x)
             if any(same_beam(image, o, SAME_BEAM) for o in out + added if o is not None):
                 continue
             new = polish(r)
