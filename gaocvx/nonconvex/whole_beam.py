@@ -202,12 +202,13 @@ def _active_set(dp, x, rows, levels, act, size) -> tuple:
     ``MAX_CHANGES`` (or comes back to one it had)."""
     act = set(np.asarray(act, int).tolist())
     seen = set()
+    ref = float(np.linalg.norm(x))
     for _ in range(MAX_CHANGES):
         if frozenset(act) in seen:
             log.debug("whole-beam polish: the active set cycles")
             return None, None
         seen.add(frozenset(act))
-        x, lam = _newton(dp, x, rows, levels, sorted(act))
+        x, lam = _newton(dp, x, rows, levels, sorted(act), ref)
         if x is None:
             log.debug("whole-beam polish: Newton's method did not converge")
             return None, None
@@ -228,10 +229,17 @@ def _active_set(dp, x, rows, levels, act, size) -> tuple:
     return None, None
 
 
-def _newton(dp, x, rows, levels, act) -> tuple:
+def _newton(dp, x, rows, levels, act, ref: float = 0.0) -> tuple:
     """Newton's method on ``∇Π = A_actᵀ λ, A_act x = levels_act``; ``(x, lam)`` with one
     multiplier per row of ``rows`` (zero off the independent active rows), or
-    ``(None, None)`` where it does not converge."""
+    ``(None, None)`` where it does not converge.
+
+    Steps are measured against the iterate's norm, at least ``ref`` (the polished
+    beam's start): rows that pin every DOF hold the beam at w = 0 exactly, whose
+    own norm (1e-39) is no measure, and the active set must go on from there (a
+    P4 beam resting in a channel at gap 0, lifted 8.6e-12 m by a load table, 32
+    elements: its slice's 184 touching rows dropped one by one).
+    """
     A = rows[act].toarray() if act else np.zeros((0, len(x)))
     norms = np.linalg.norm(A, axis=1)
     keep = np.arange(len(act))
@@ -267,7 +275,7 @@ def _newton(dp, x, rows, levels, act) -> tuple:
         # STALL of the beam (the gradient's round-off grows like N^4 eps in the
         # Hermite DOFs: at 30 elements the steps stalled near 1e-12 of it)
         dx = float(np.linalg.norm(step[:len(x)]))
-        size = float(np.linalg.norm(x))
+        size = max(float(np.linalg.norm(x)), ref)
         if dx <= 1e-13 * size or (dx <= STALL * size and dx > 0.5 * last):
             lam = np.zeros(rows.shape[0])
             lam[np.asarray(act, int)[keep]] = nu * scale
