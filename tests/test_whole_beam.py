@@ -161,7 +161,7 @@ def test_an_active_set_met_again_ends_the_polish(monkeypatch):
     dp, _ = _quadratic([[-1.0]], [1.0])
     calls = []
     newton = wb._newton
-    monkeypatch.setattr(wb, "_newton", lambda *a: calls.append(list(a[-1])) or newton(*a))
+    monkeypatch.setattr(wb, "_newton", lambda *a: calls.append(list(a[4])) or newton(*a))
     rows = sp.csr_matrix([[1.0]])
     x, lam = wb._active_set(dp, np.array([0.5]), rows, np.zeros(1), [], 1.0)
     assert x is None and lam is None
