@@ -48,7 +48,7 @@ from ..certificate import certify
 from ..tolerances import TOUCH_TOL, complementarity
 
 __all__ = ["psi_certificate", "contact_multipliers", "certify_contact", "certify_answer",
-           "modes_size", "beam_size"]
+           "certify_flat", "modes_size", "beam_size"]
 
 
 def psi_certificate(dp, modes, u, lam, rows, levels=None, floor: float = 0.0) -> dict:
@@ -199,6 +199,19 @@ def certify_contact(dp, modes, u, lam, rows, levels, floor: float = 0.0) -> tupl
             return res, cand
         tried.append((res, cand))
     return tried[-1] if tried else ({"stationarity": math.inf}, lam)
+
+
+def certify_flat(dp, modes, rows, levels, floor: float = 0.0):
+    """The certificate of the flat beam ``w = 0``: ``(residual, lam)`` of
+    :func:`certify_contact` (multipliers recomputed on the touching rows), or None
+    where ``w = 0`` violates a row (a gap below 0) or fails the certificate."""
+    from ..certificate import passes
+
+    u0 = np.zeros(rows.shape[1])
+    if np.any(rows @ u0 < levels):
+        return None
+    residual, lam = certify_contact(dp, modes, u0, None, rows, levels, floor)
+    return (residual, lam) if passes(residual) else None
 
 
 def certify_answer(dp, prog, mf, z, lam) -> tuple:

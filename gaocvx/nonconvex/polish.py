@@ -19,7 +19,7 @@ import scipy.optimize as so
 
 from ..mixed import MixedForm
 from ..certificate import passes
-from .certificate import certify_answer, certify_contact, contact_polish
+from .certificate import certify_answer, certify_flat, contact_polish
 
 __all__ = ["to_mixed", "polish", "feasible_energy", "reflections", "answer_certificate",
            "search_best", "flat_answer", "SLACK"]
@@ -275,7 +275,7 @@ def flat_answer(dp, prog, mf, bound):
     ``bound`` (in ``dp``'s unit) and it passes the certificate; else None.
 
     Only with an obstacle and up to :data:`.whole_beam.MAX_UNKNOWNS` free DOFs (the
-    dense certificate, :func:`.certificate.certify_contact`, as for
+    dense certificate, :func:`.certificate.certify_flat`, as for
     :func:`.obstacle_checks.exact_flat`).  A beam pressed flat onto an obstacle at
     gap 0 just above ``P_bar_h`` is measured in a metric whose margin along the
     first mode is ``p - lambda_1``: there the search's answers, zero to round-off
@@ -294,10 +294,8 @@ def flat_answer(dp, prog, mf, bound):
     if dp.contact != "obstacle" or dp.n > MAX_UNKNOWNS:
         return None
     u0 = np.zeros(dp.n)
-    if np.min(prog.rows @ u0 - prog.levels, initial=0.0) < 0 or not dp.energy(u0) <= bound:
+    if not dp.energy(u0) <= bound:
         return None
-    floor = mf.zero_floor if mf.has_load else 0.0
-    residual, lam = certify_contact(dp, prog.modes, u0, None, prog.rows, prog.levels, floor)
-    if not passes(residual):
-        return None
-    return mf.on_manifold(to_mixed(mf, u0)), residual, lam
+    flat = certify_flat(dp, prog.modes, prog.rows, prog.levels,
+                        mf.zero_floor if mf.has_load else 0.0)
+    return None if flat is None else (mf.on_manifold(to_mixed(mf, u0)),) + flat
