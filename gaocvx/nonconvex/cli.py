@@ -95,6 +95,10 @@ def _cmd_equilibria(args) -> int:
     if args.plot:
         from .pictures import save_equilibria_plot
         save_equilibria_plot(eqs, args.plot, scene)
+    if eqs and eqs[0].complete is not True:
+        why = ("two unstable modes: the plane of amplitudes is sampled" if eqs[0].complete is None
+               else "the reduced gradient's sign bound did not cover every amplitude")
+        print(f"note: {args.scene}: the list is not proven complete ({why})", file=sys.stderr)
     bad = [e for e in eqs if e.status != "optimal"]
     if bad:
         print(f"error: {args.scene}: {_count(len(bad), 'equilibrium', 'equilibria')} not found "

@@ -158,6 +158,13 @@ class Equilibrium:
     whole_beam : bool
         Polished and certified on the whole beam, in its own scale
         (:mod:`.whole_beam`), not through a slice of the reduced function.
+    complete : bool or None
+        Of the list it belongs to: True where it is proven to miss no
+        equilibrium (one unstable mode: every zero of the reduced gradient
+        within ``stationary.RHO`` of the amplitude range of a listed one, by
+        :mod:`.completeness`; below the limit the one equilibrium), False where
+        that proof failed, None where none is attempted (two unstable modes:
+        a sampling).
     """
 
     energy: float
@@ -173,6 +180,7 @@ class Equilibrium:
     W: float = field(default=math.nan)
     energy_scale: float = field(default=math.nan)
     whole_beam: bool = False
+    complete: bool | None = None
 
     @property
     def amplitude_m(self) -> list:
@@ -226,6 +234,6 @@ class Equilibrium:
         """One JSON object: energy, stability, extrema, amplitudes, nodal values."""
         return {"energy": self.energy, "stability": "stable" if self.stable else "unstable",
                 "P": self.P, "min": self.min, "max": self.max, "amplitudes": self.amplitudes,
-                "status": self.status, "residual": self.residual,
+                "status": self.status, "residual": self.residual, "complete": self.complete,
                 "nodes": {"x": self.x.tolist(), "w": self.w.tolist(),
                           "slope": self.slope.tolist()}}

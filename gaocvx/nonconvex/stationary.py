@@ -51,6 +51,7 @@ from ..discrete import DiscreteProblem
 from ..errors import SceneError, SolverError
 from ..scene import check_solve_arguments, numbers_of, whole
 from .bounds import check_bounded, equilibrium_box, estimate_boxes, zoom_boxes
+from .completeness import proven_roots
 from .contours import sampled_roots
 from .equilibrium import Equilibrium, check_has_minimum, check_mountain_pass, same_point
 from .images import complete_beams
@@ -71,13 +72,19 @@ MAX_GRID = 100_000
 # |F'(s)| |s| at a zero, relative to the equilibrium's energy scale (sum of
 # |energy parts|), at most (the node programs' own accuracy is about 1e-10).
 ROOT_TOL = 1e-8
+# Zeros of F' closer than this (times the amplitude range S) to a listed one are
+# not told apart by the proof that none is missing (the probes' distance).
+RHO = 1e-6
+# The fixed-amplitude solves' accuracy in F', relative to its local size (Newton's
+# method to round-off on the slices; the proof takes it as given).
+DERIVATIVE_TOL = 1e-9
 
 
 def _convex_equilibrium(scene, elements, dp) -> list:
     from ..solve import solve
     r = solve(scene, "global", elements=elements)
     return [Equilibrium(r.energy, True, [], r.x, r.w, r.slope, 0.0, r.status,
-                        float(scene.load.axial))]
+                        float(scene.load.axial), complete=True)]
 
 
 def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
@@ -200,6 +207,7 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         # construction).
         smin, smax = admissible(prog)
         lo, hi = np.maximum(lo, smin), np.minimum(hi, smax)
+    complete = None    # (two modes: a sampling, no proof)
     if modes.k == 2:
         from .stationary2 import find_plane
         glob = global_minimisers(dp, modes) if obstacle else []
@@ -232,8 +240,8 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                                                      if obstacle else [])
         points = np.concatenate([np.asarray(seeds, float) / dp.W]
                                 + [np.linspace(a[0], b[0], grid) for a, b in boxes])
-        out = _find(dp, prog, S, points, grid, float(lo[0]), float(hi[0]),
-                    scene_energy(dp, modes), polish)
+        out, complete = _find(dp, prog, S, points, grid, float(lo[0]), float(hi[0]),
+                              scene_energy(dp, modes), float(modes.c[0]), polish)
         if obstacle:
             check_contact(dp, prog, out, polish, S)
         if obstacle and None not in out:
@@ -253,6 +261,7 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         for e in out:
             parts = dp.energy_parts(dp.from_physical(e.w, e.slope))
             e.energy_scale = float(sum(abs(v) for v in parts.values()) * dp.E0)
+            e.complete = complete
         check_has_minimum(out)
         check_mountain_pass(out)
         return out
@@ -297,7 +306,9 @@ def _classify(dF, r, h) -> tuple:
     return bool(right[1] > 0 if fr else left[1] < 0), curvature
 
 
-def _find(dp, prog, S, seeds, grid, lo, hi, floor, polish=None):
+def _find(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None) -> tuple:
+    """The equilibria with amplitudes in ``[lo, hi]`` and whether the sign bound
+    proved that the list misses none (:func:`.completeness.proven_roots`)."""
     t0 = time.perf_counter()
     cache = {}
 
@@ -366,9 +377,24 @@ def _find(dp, prog, S, seeds, grid, lo, hi, floor, polish=None):
     # obstacle, a stable equilibrium, and the unstable one next to it were missed
     # under a load table with unloaded ends)
     roots = sampled_roots(lambda s: dF(s)[1], [s for s, _ in vals], [v[1] for _, v in vals], S)
+    # the sign bound's proof that no zero is missing (:mod:`.completeness`), with
+    # the zeros its samples reveal.  F' counts as possibly zero within
+    # DERIVATIVE_TOL of its local size (the concave part's 2 c S, or F' at the
+    # interval's ends): the fixed-amplitude solves' accuracy.  (Not the zeros'
+    # residual test, which passed |F'| up to 3e-4 of its size 2e-4 S from an
+    # unstable zero; nor F''s largest size over the range, 4e5 next to an
+    # obstacle's edge, for which the bound could not come within 1e-6 S of a
+    # stable zero where F'' = 81 -- both campaign scenes.)
+    def slope(s):
+        return dF(s)[1] if math.isfinite(dF(s)[0]) and dF(s)[3] else math.nan
+
+    roots, complete = proven_roots(
+        slope, [s for s, _ in vals], roots, [inside for inside, _ in ends], c,
+        lambda a, b: DERIVATIVE_TOL * (2.0 * c * S + max(abs(slope(a)), abs(slope(b)))),
+        RHO * S)
 
     failed = [t for t in sampled if not math.isfinite(dF(t)[0]) and not at_an_end(t)]
-    if failed:
+    if failed and not complete:   # (proven complete, nothing lies there)
         # (the list may then miss equilibria there: a P4 beam in a channel 3.8e-6 m
         # high had its slices fail over most of the range -- extreme-scale campaign)
         log.warning("equilibria: the slices failed at %d of %d sampled amplitudes inside the "
@@ -459,8 +485,8 @@ def _find(dp, prog, S, seeds, grid, lo, hi, floor, polish=None):
                                w, slope, float(res), status, float(dp.P), float(curvature),
                                float(dp.W)))
     if None in out:
-        return [None]
+        return [None], False
     out.sort(key=lambda e: e.energy)
-    log.info("equilibria: %d found with %d solves in %.2f s", len(out), len(cache),
-             time.perf_counter() - t0)
-    return out
+    log.info("equilibria: %d found with %d solves in %.2f s (%s)", len(out), len(cache),
+             time.perf_counter() - t0, "none missed" if complete else "not proven complete")
+    return out, complete
