@@ -116,14 +116,14 @@ def test_the_proof_finds_what_three_samples_miss():
     from gaocvx.nonconvex.fast import FastProgram
     from gaocvx.nonconvex.minimum import rescale_for, scene_energy
     from gaocvx.nonconvex.modes import unstable_modes
-    from gaocvx.nonconvex.stationary import _find
+    from gaocvx.nonconvex.stationary1 import find_line
 
     scene = Scene.from_dict(scene_dict("P4", q=-1e7, axial=1.3e9, elements=12))
     dp = DiscreteProblem(scene, check_convexity=False)
     modes = unstable_modes(dp)
     dp = rescale_for(dp, modes)
     S = float(equilibrium_box(dp, float(modes.lam[0]) * (1 - 1e-9)))
-    found, complete = _find(dp, FastProgram(dp, modes), S, np.array([]), 2, -S, S,
+    found, complete = find_line(dp, FastProgram(dp, modes), S, np.array([]), 2, -S, S,
                             scene_energy(dp, modes), float(modes.c[0]))
     assert complete and all(e.status == "optimal" for e in found)
     W = max(np.max(np.abs(e.w)) for e in found)

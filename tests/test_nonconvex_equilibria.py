@@ -344,13 +344,13 @@ def test_a_list_without_a_stable_equilibrium_is_inaccurate(monkeypatch):
     equilibrium: a list with none is wrong somewhere.  With every zero's probes
     made to fall (so the search labels all unstable), no entry may stay
     `optimal`; the unchanged search lists a stable one and all `optimal`."""
-    import gaocvx.nonconvex.stationary as st
+    import gaocvx.nonconvex.stationary1 as st
 
     scene = Scene.from_dict({**scene_dict("P4", q=-1e6, elements=8),
                              "load": {"q": -1e6, "axial": 1.5e9}})
     eqs = equilibria(scene)
     assert any(e.stable for e in eqs) and all(e.status == "optimal" for e in eqs)
-    monkeypatch.setattr(st, "_classify", lambda dF, r, h: (False, -1.0))
+    monkeypatch.setattr(st, "classify", lambda dF, r, h: (False, -1.0))
     eqs = equilibria(scene)
     assert len(eqs) == 3 and not any(e.stable for e in eqs)
     assert all(e.status == "inaccurate" for e in eqs)
@@ -362,13 +362,13 @@ def test_two_minima_without_an_unstable_equilibrium_between_them_are_inaccurate(
     Without load above the limit the list is the two mirror minima and the flat
     beam between them, unstable; with every zero's probes made to rise (all
     labelled stable), no entry may stay `optimal`."""
-    import gaocvx.nonconvex.stationary as st
+    import gaocvx.nonconvex.stationary1 as st
 
     scene = Scene.from_dict({**scene_dict("P1", elements=8), "load": {"axial": 7.0e9}})  # 1.5 P_bar_h
     eqs = equilibria(scene)
     assert sum(e.stable for e in eqs) == 2 and sum(not e.stable for e in eqs) == 1
     assert all(e.status == "optimal" for e in eqs)
-    monkeypatch.setattr(st, "_classify", lambda dF, r, h: (True, 1.0))
+    monkeypatch.setattr(st, "classify", lambda dF, r, h: (True, 1.0))
     eqs = equilibria(scene)
     assert len(eqs) == 3 and all(e.stable for e in eqs)
     assert all(e.status == "inaccurate" for e in eqs)

@@ -85,7 +85,7 @@ def least_rise(grad, s, h, n: int = 16, fine: int = 64, kink: bool = False) -> f
     K - 2c > 0 called it stable where lifting off lowers the energy (a
     campaign's P4 beam on a bed of 3e12 N/m^2 at 5e9 N, 8 elements; a path
     called w = 0 unstable at 4e9 N and stable at 5e9 N).  With one mode the
-    two sides are compared already (:func:`.stationary._classify`).  Under a
+    two sides are compared already (:func:`.stationary1.classify`).  Under a
     load that presses a beam flat at gap 0, F rises in most directions (the
     load's work) and falls only in a narrow cone where the beam lifts off its
     unloaded span: 10 degrees wide for a P2 beam under two point forces, between

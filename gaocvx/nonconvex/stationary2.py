@@ -95,7 +95,7 @@ from .descents import descents as _descents, in_square as _in_square, passes as 
 from .equilibrium import Equilibrium, same_point
 from .obstacle_checks import at_global, check_contact, exact_flat
 from .probes import curvature as _curvature, least_rise as _least_rise
-from .stationary import ROOT_TOL
+from .stationary1 import ROOT_TOL
 from .whole_beam import polisher, settle as settle_beams
 
 __all__ = ["find_plane", "GRID2"]

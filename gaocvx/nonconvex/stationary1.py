@@ -1,0 +1,250 @@
+"""The equilibria of one unstable mode: the zeros of ``F'`` along its amplitude.
+
+:func:`find_line` samples ``F'`` (the reduced gradient, one fixed-amplitude solve
+per point) over the admissible amplitudes, refines each sign change and each
+close pair of zeros (:func:`.contours.sampled_roots`), locates the edges an
+obstacle puts to the amplitudes, proves that no zero is missing
+(:mod:`.completeness`), and labels each zero stable or unstable
+(:func:`classify`).  :func:`.stationary.equilibria` calls it and polishes what
+it finds; :mod:`.stationary2` is its counterpart for two modes.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+
+import numpy as np
+
+from ..errors import SceneError
+from .completeness import proven_roots
+from .contours import sampled_roots
+from .equilibrium import Equilibrium, same_point
+
+__all__ = ["classify", "find_line", "ROOT_TOL", "RHO", "DERIVATIVE_TOL"]
+
+log = logging.getLogger(__name__)
+
+# |F'(s)| |s| at a zero, relative to the equilibrium's energy scale (sum of
+# |energy parts|), at most (the node programs' own accuracy is about 1e-10).
+ROOT_TOL = 1e-8
+# Zeros of F' closer than this (times the amplitude range S) to a listed one are
+# not told apart by the proof that none is missing (the probes' distance).
+RHO = 1e-6
+# The fixed-amplitude solves' accuracy in F', relative to its local size (Newton's
+# method to round-off on the slices; the proof takes it as given).
+DERIVATIVE_TOL = 1e-9
+
+
+def classify(dF, r, h) -> tuple:
+    """``(stable, curvature)`` of a zero ``r`` of F' from F' at ``r -+ h``.
+
+    A minimum of F has F' < 0 to its left and > 0 to its right; a side
+    outside the admissible amplitudes (an obstacle's edge: ``F = inf`` there)
+    counts as rising, for F cannot be lowered that way.  (Taking the probe's
+    F' = 0 outside the range for a slope labelled a flat beam held by a gap-0
+    obstacle, the certified global minimiser, unstable: a trial's P4 beam under
+    a load table with unloaded ends at 1.02 P_bar_h.)
+    """
+    mid = dF(r)[1]
+    left, right = (dF(r + t) for t in (-h, h))
+    fl, fr = math.isfinite(left[0]), math.isfinite(right[0])
+    if fl and fr:
+        # (the lesser one-sided curvature: at a kink of F's curvature -- a flat
+        # beam lifting off a bed at gap 0 -- the central difference averages a
+        # falling side with a rising one, and the label is the sides')
+        curvature = min(right[1] - mid, mid - left[1]) / h
+        if right[1] != left[1]:
+            return bool(left[1] < 0 < right[1]), curvature
+        return bool(curvature > 0), curvature
+    if not (fl or fr):
+        return False, math.nan
+    curvature = (right[1] - mid) / h if fr else (mid - left[1]) / h
+    return bool(right[1] > 0 if fr else left[1] < 0), curvature
+
+
+def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None) -> tuple:
+    """The equilibria with amplitudes in ``[lo, hi]`` and whether the sign bound
+    proved that the list misses none (:func:`.completeness.proven_roots`)."""
+    t0 = time.perf_counter()
+    cache = {}
+
+    def dF(s):
+        if s not in cache:
+            F, d, u, ok = prog.reduced([s])
+            cache[s] = (F, float(d[0]), u, ok)
+        return cache[s]
+
+    def at_an_end(t):
+        # With one mode the admissible amplitudes are the interval [lo, hi] (the
+        # linear program's, widened by fast_check.RANGE_PAD relative): F = inf
+        # strictly inside it is a failed slice, no edge.  (A P1 beam in a channel
+        # 1.2e-8 m high, 6 elements: slices failing inside the range made a fake
+        # edge, reported as an `optimal` stable equilibrium where a feasible step
+        # lowers the energy by 4 % -- a campaign at extreme scales.)
+        from .fast_check import RANGE_PAD
+        tol = max(1e-6 * (hi - lo), 4.0 * RANGE_PAD * (1.0 + max(abs(lo), abs(hi))))
+        return t <= lo + tol or t >= hi - tol
+
+    inside = seeds[(seeds >= lo) & (seeds <= hi)]
+    if lo <= 0.0 <= hi:   # the trivial equilibrium of an unloaded beam
+        inside = np.r_[inside, 0.0]
+    sampled = [float(s) for s in np.union1d(np.linspace(lo, hi, grid), inside)]
+    for s in sampled:
+        dF(s)
+    # An obstacle bounds the amplitudes (a beam lying flat on it has the smallest):
+    # where the grid steps from infeasible to feasible, the boundary is found by
+    # bisection and sampled just inside, else a beam pressed onto the obstacle
+    # (a zero of F' right next to the boundary, where F' falls steeply) is missed.
+    extra, ends = [], []
+    for a, b in zip(sampled[:-1], sampled[1:]):
+        va, vb = dF(a), dF(b)   # (a's may have been solved again below)
+        if math.isfinite(va[0]) != math.isfinite(vb[0]):
+            inside, outside = (b, a) if math.isfinite(vb[0]) else (a, b)
+            for _ in range(40):
+                mid = 0.5 * (inside + outside)
+                # (an inaccurate solve counts as outside: at gap 0 the fast slices
+                # accept a violation of 1e-9 as admissible but not accurate)
+                if math.isfinite(dF(mid)[0]) and dF(mid)[3]:
+                    inside = mid
+                else:
+                    outside = mid
+            lost = b if math.isfinite(va[0]) else a
+            if not at_an_end(lost) and hasattr(prog, "cold"):
+                # A contact slice failed strictly inside the range: solved again, warm
+                # from the bisection's slice next to it (P1 pressed flat in a channel
+                # at gap 0 near P_bar_h: the slice at s = 0.0032, warm from the flat
+                # beam's and cold, stalled at a violation of 1.9e-9; the bisection on
+                # either side reached it, and its fake edge was listed as a stable
+                # `inaccurate` entry, no equilibrium -- a random campaign)
+                del cache[lost]
+                if math.isfinite(dF(lost)[0]):
+                    continue
+            extra.append((inside, dF(inside)))
+            ends.append((inside, outside))
+    vals = sorted([(s, v) for s, v in [(s, dF(s)) for s in sampled] + extra
+                   if math.isfinite(v[0])], key=lambda item: item[0])
+    if not vals:
+        raise SceneError("scene", "no admissible amplitude of the buckling mode (no solve "
+                         "succeeded)")
+    scale = max(max(abs(v[0]) for _, v in vals), 1e-300)
+    # sign changes of F' and pairs of zeros between neighbouring grid points (a
+    # local extremum of F' near zero: the test was once sign * F' < 0 at the
+    # extremum, right for a minimum of F' only -- a flat beam held by a gap-0
+    # obstacle, a stable equilibrium, and the unstable one next to it were missed
+    # under a load table with unloaded ends)
+    roots = sampled_roots(lambda s: dF(s)[1], [s for s, _ in vals], [v[1] for _, v in vals], S)
+    # the sign bound's proof that no zero is missing (:mod:`.completeness`), with
+    # the zeros its samples reveal.  F' counts as possibly zero within
+    # DERIVATIVE_TOL of its local size (the concave part's 2 c S, or F' at the
+    # interval's ends): the fixed-amplitude solves' accuracy.  (Not the zeros'
+    # residual test, which passed |F'| up to 3e-4 of its size 2e-4 S from an
+    # unstable zero; nor F''s largest size over the range, 4e5 next to an
+    # obstacle's edge, for which the bound could not come within 1e-6 S of a
+    # stable zero where F'' = 81 -- both campaign scenes.)
+    def slope(s):
+        return dF(s)[1] if math.isfinite(dF(s)[0]) and dF(s)[3] else math.nan
+
+    roots, complete = proven_roots(
+        slope, [s for s, _ in vals], roots, [inside for inside, _ in ends], c,
+        lambda a, b: DERIVATIVE_TOL * (2.0 * c * S + max(abs(slope(a)), abs(slope(b)))),
+        RHO * S)
+
+    failed = [t for t in sampled if not math.isfinite(dF(t)[0]) and not at_an_end(t)]
+    if failed and not complete:   # (proven complete, nothing lies there)
+        # (the list may then miss equilibria there: a P4 beam in a channel 3.8e-6 m
+        # high had its slices fail over most of the range -- extreme-scale campaign)
+        log.warning("equilibria: the slices failed at %d of %d sampled amplitudes inside the "
+                    "admissible range; equilibria there may be missing from the list",
+                    len(failed), len(sampled))
+    out = []
+    # An end of the admissible amplitudes where F rises into the range (F' > 0 at
+    # the lower end, < 0 at the upper) is a local minimum of F there, so of the
+    # energy: every admissible beam nearby has amplitudes in the range.  A beam
+    # pressed flat onto an obstacle at gap 0 is one (F(s) = 0.44 s at s >= 0 on 16
+    # elements, P4): no zero of F' marks it.  Its residual is |F'| times the
+    # bisection's bracket (the end lies in it).
+    for inside, outside in ends:
+        F, d0, u, ok = dF(inside)
+        if u is None or not (d0 > 0 if outside < inside else d0 < 0):
+            continue
+        roots = [r for r in roots if abs(r - inside) > 1e-9 * S]
+        w, slope = dp.to_physical(u)
+        size = max(sum(abs(v) for v in dp.energy_parts(u).values()), floor) or scale
+        res = abs(d0) * abs(outside - inside) / size
+        status = "optimal" if ok and res <= ROOT_TOL and at_an_end(outside) else "inaccurate"
+        out.append(Equilibrium(float(dp.energy(u) * dp.E0), True, [float(inside)], dp.x.copy(),
+                               w, slope, float(res), status, float(dp.P), math.nan, float(dp.W)))
+    for r in sorted(set(roots)):
+        if any(abs(r - e) <= 1e-9 * S for e in [q.amplitudes[0] for q in out]):
+            continue
+        F, d0, u, ok = dF(r)
+        if u is None:   # (a slice that failed inside the range: no beam to report)
+            log.warning("equilibria: no admissible slice at the zero s = %.17g", r)
+            out.append(None)   # (the caller's: the list is incomplete)
+            continue
+        # (probes closer than the nearest other zero: a P2 beam 9.8e-10 m into a
+        # bed 8.4e-10 m below, 1.8e-6 S from w = 0, was called unstable from
+        # probes 3e-6 S wide that straddled w = 0 -- an extreme-scale campaign)
+        # (other zeros only, beyond the merging distance: an edge's probe beyond
+        # it counts as rising anyway)
+        near = [abs(q - r) for q in set(roots) if abs(q - r) > 1e-9 * S]
+        h = max(min([1e-6 * S] + [0.25 * q for q in near]), 1e-10 * S)
+        stable, curvature = classify(dF, r, h)
+        # (an inadmissible probe counts as rising only at an end of the range:
+        # inside it the slice failed, and the stability is not known)
+        undecided = any(not math.isfinite(dF(t)[0]) and not at_an_end(t) for t in (r - h, r + h))
+        w, slope = dp.to_physical(u)
+        # |F'| times the amplitude: the work of the residual force, relative to
+        # the equilibrium's energy scale (w = 0: the amplitude range's thousandth)
+        # (at least the scene's own energy: a trivial equilibrium the dense
+        # programs return as 1e-13 instead of 0 has energy parts of 1e-16, against
+        # which any residual was too large)
+        own = sum(abs(v) for v in dp.energy_parts(u).values())
+        size = max(own, floor) or scale
+        res = abs(d0) * max(abs(r), 1e-3 * S) / size
+        if polish is not None and ok and res <= ROOT_TOL < res * size / max(own, 1e-300):
+            # a zero to the scene's accuracy but not to its own (near the flat beam):
+            # polished on the whole beam, and listed as that returns it, if it does
+            # (:mod:`.whole_beam`)
+            polished = polish(u)
+            if polished is not None and same_point(polished.amplitudes, [r], S):
+                out.append(polished)
+                continue
+        if res > ROOT_TOL:
+            # A kink of F (the obstacle takes or releases the beam: a beam lying flat
+            # at gap 0 between supports has F(s) = 0.55 |s| on 16 elements, P1): F'
+            # jumps through zero (upwards: F is convex but for -c s^2) and |F'| at the
+            # zero stays large.  The equilibrium lies between r - e and r + e when F'
+            # changes sign there, and the energy within |F'| 2e of F(r).  (The
+            # slices of amplitudes 1e-12 from a flat beam's are round-off: wider
+            # windows after the narrowest.)
+            # An edge of the admissible amplitudes within e of r (the obstacle holds
+            # the beam flat: no amplitude on one side) with F rising into the range
+            # is a minimum of F there, so of the energy, as at the ends above (a
+            # trial's P4 beam at gap 0 under a load of 1e5 N/m at 2 P_bar_h: the
+            # flat beam's zero had its left probe outside the range and was
+            # reported unstable and inaccurate).
+            for e in (1e-12 * S, 1e-10 * S, 1e-9 * S):
+                a, b = dF(r - e), dF(r + e)
+                fa, fb = math.isfinite(a[0]), math.isfinite(b[0])
+                if fa and fb and a[1] * b[1] < 0:
+                    res = min(res, max(abs(a[1]), abs(b[1])) * 2 * e / size)
+                    stable = a[1] < 0
+                    break
+                if fa != fb and (b[1] > 0 if fb else a[1] < 0) and \
+                        at_an_end(r + e if fa else r - e):
+                    res = min(res, abs((b if fb else a)[1]) * e / size)
+                    stable = True
+                    break
+        status = "optimal" if ok and res <= ROOT_TOL and not undecided else "inaccurate"
+        out.append(Equilibrium(float(dp.energy(u) * dp.E0), bool(stable), [float(r)], dp.x.copy(),
+                               w, slope, float(res), status, float(dp.P), float(curvature),
+                               float(dp.W)))
+    if None in out:
+        return [None], False
+    out.sort(key=lambda e: e.energy)
+    log.info("equilibria: %d found with %d solves in %.2f s (%s)", len(out), len(cache),
+             time.perf_counter() - t0, "none missed" if complete else "not proven complete")
+    return out, complete
