@@ -18,7 +18,7 @@ from test_nonconvex_equilibria import independent_reduced_slope_changes
 
 from gaocvx import Scene, load_scene
 from gaocvx.cli import main
-from gaocvx.nonconvex import completeness, equilibria
+from gaocvx.nonconvex import completeness, equilibria, equilibrium_path
 from gaocvx.nonconvex.completeness import cover, proven_roots
 from gaocvx.nonconvex.contours import sampled_roots
 
@@ -155,3 +155,13 @@ def test_cli_reports_a_list_not_proven_complete(tmp_path, capsys, monkeypatch):
     out, err = capsys.readouterr()
     assert [json.loads(x)["complete"] for x in out.splitlines()] == [False] * 3
     assert "the list is not proven complete" in err
+
+
+def test_a_path_says_for_each_force_whether_its_list_is_proven():
+    scene = Scene.from_dict(scene_dict("P4", q=-1e7, elements=8))
+    path = equilibrium_path(scene, [0.5e9, 1.5e9])
+    assert [len(path.at(P)) for P in (0.5e9, 1.5e9)] == [1, 3]
+    assert all(pt["complete"] is True for pt in path.points)
+    rows = path.rows()
+    column = rows[0].index("complete")
+    assert [r[column] for r in rows[1:]] == ["true"] * 4

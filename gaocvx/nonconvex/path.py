@@ -71,7 +71,8 @@ class EquilibriumPath:
     points : list of dict
         One per equilibrium: ``P``, ``w_c`` (deflection at ``x_c``), ``max_abs_w``,
         ``energy`` [J], ``stable``, ``global`` (the global minimiser at its P),
-        ``amplitude``, ``status``.
+        ``amplitude``, ``status``, ``complete`` (its force's list proven to miss
+        no equilibrium: :attr:`.Equilibrium.complete`).
     x_c : float
         Where ``w_c`` is taken [m].
     errors : dict
@@ -118,7 +119,7 @@ class EquilibriumPath:
         ``true``/``false`` (as in the JSON), a missing value (a force's error
         row, an amplitude below the limit) as ``None`` (an empty cell)."""
         keys = ["P", "w_c", "max_abs_w", "energy", "stable", "global", "amplitude", "status",
-                "error"]
+                "complete", "error"]
 
         def cell(value):
             return ("true" if value else "false") if isinstance(value, (bool, np.bool_)) \
@@ -240,7 +241,7 @@ def equilibrium_path(scene, P_values, elements: int | None = None, x_c: float | 
                            "max_abs_w": float(np.max(np.abs(e.w))), "energy": e.energy,
                            "stable": e.stable, "global": best,
                            "amplitude": e.amplitudes[0] if e.amplitudes else None,
-                           "status": e.status})
+                           "status": e.status, "complete": e.complete})
         # Warm start: the next force samples these amplitudes first (a force
         # with no equilibria passes on the last ones found).
         if eqs:
