@@ -593,12 +593,17 @@ def test_a_beam_lifted_by_a_fraction_of_a_load_table_is_polished():
     assert 1e-13 < float(np.max(np.abs(eqs[1].w))) < 1e-11
 
 
-def test_one_mode_says_when_slices_fail_inside_the_range(caplog):
+def test_one_mode_bounds_where_slices_fail_inside_the_range(caplog, monkeypatch):
     """A P4 beam in a channel 3.8e-6 m high (extreme-scale campaign): the slices
-    fail over most of the admissible range, and the list must say that it may be
-    incomplete there (a warning, and ``complete`` False).  The stable beam held at the ceiling that an independent
-    multi-start finds (-1.0234188354e-4 J), once missing, is found on the finer
-    grid where the mode reaches the ceiling."""
+    fail over most of the admissible range (s from -2.72 to -0.34, and from 9.2e-4
+    to 9.3e-4).  There F' at the last solved amplitudes bounds F' on the rest
+    (F + c s^2 convex: F' = -3.4e7 at -0.34, below -2c (2.38) = -31; F' = 152 at
+    9.2e-4, above 2c (6.9e-6)): no equilibrium lies there, the list is proven
+    complete, and no warning is due.  Without the proof (no solves left for it)
+    the list says that it may be incomplete there (a warning, ``complete``
+    False).  The stable beam held at the ceiling that an independent multi-start
+    finds (-1.0234188354e-4 J), once missing, is found on the finer grid where the
+    mode reaches the ceiling."""
     import logging
     from gaocvx import Scene
     scene = Scene.from_dict({
@@ -612,11 +617,18 @@ def test_one_mode_says_when_slices_fail_inside_the_range(caplog):
         "obstacle": {"gap": [[0.0, 2.2628962206724234e-05], [0.4984427792162352, 6.697295662187578e-05],
                              [0.5969923084067551, 1.3623756991170315]],
                      "gap_above": 3.820017674616131e-06}})
+    from gaocvx.nonconvex import completeness
     with caplog.at_level(logging.WARNING, logger="gaocvx"):
         eqs = equilibria(scene)
+    assert "may be missing from the list" not in caplog.text
+    assert all(e.complete is True for e in eqs)
+    caplog.clear()
+    monkeypatch.setattr(completeness, "BUDGET", 0)
+    with caplog.at_level(logging.WARNING, logger="gaocvx"):
+        unproven = equilibria(scene)
     assert "may be missing from the list" in caplog.text
-    assert all(e.complete is False for e in eqs)    # (not proven: was True, beyond s = 9.2e-4
-    #                                                   the range was never examined)
+    assert all(e.complete is False for e in unproven)
+    assert [e.energy for e in unproven] == [e.energy for e in eqs]
     # (to 1e-8 of the scene's energy, 0.016 J: the multi-start's stationarity was 4.5e-8)
     assert any(e.stable and e.status == "optimal" and abs(e.energy + 1.0234188354e-4) <= 2e-10
                for e in eqs), [(e.energy, e.stable, e.status) for e in eqs]

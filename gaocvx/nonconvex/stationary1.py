@@ -146,21 +146,24 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None) -> tuple:
     def slope(s):
         return dF(s)[1] if math.isfinite(dF(s)[0]) and dF(s)[3] else math.nan
 
-    roots, complete = proven_roots(
-        slope, [s for s, _ in vals], roots, [inside for inside, _ in ends], c,
-        lambda a, b: DERIVATIVE_TOL * (2.0 * c * S + max(abs(slope(a)), abs(slope(b)))),
-        RHO * S)
+    def tol(a, b):
+        return DERIVATIVE_TOL * (2.0 * c * S + max(abs(slope(a)), abs(slope(b))))
+
+    roots, complete = proven_roots(slope, [s for s, _ in vals], roots,
+                                   [inside for inside, _ in ends], c, tol, RHO * S)
 
     failed = [t for t in sampled if not math.isfinite(dF(t)[0]) and not at_an_end(t)]
-    # The proof spans the solved amplitudes only: between two of them a failed slice
-    # is bounded by its neighbours (the admissible amplitudes are an interval), but
-    # beyond the last one the range is not examined.  (A P4 beam in a channel
-    # 3.8e-6 m high, extreme-scale campaign: slices failed from s = 9.2e-4 up to the
-    # range's end, the bisection's edge there was taken for the range's, and the
-    # list was called proven.)
-    span = (vals[0][0], vals[-1][0])
-    if any(not span[0] <= t <= span[1] for t in failed) or \
-            any(not at_an_end(outside) for _, outside in ends):
+    # The proof spans the solved amplitudes; between the last of them and the
+    # linear program's end of the range (where the slices failed, or the bisection
+    # stopped at a failed slice) only the end's own bound speaks: no zero in
+    # [lo, a) when F'(a) < -2c (a - lo), none in (b, hi] when F'(b) > 2c (hi - b),
+    # and then no edge minimum either (F falls into the range).  (A P4 beam in a
+    # channel 3.8e-6 m high, extreme-scale campaign: slices failed from s = 9.2e-4
+    # up to the range's end, the bisection's edge there was taken for the range's,
+    # and the list was called proven.)
+    (a, da), (b, db) = (vals[0][0], slope(vals[0][0])), (vals[-1][0], slope(vals[-1][0]))
+    if not (at_an_end(a) or da < -(2.0 * c * (a - lo) + tol(a, a))) or \
+            not (at_an_end(b) or db > 2.0 * c * (hi - b) + tol(b, b)):
         complete = False
     if failed and not complete:   # (proven complete, nothing lies there)
         # (the list may then miss equilibria there: a P4 beam in a channel 3.8e-6 m
