@@ -228,8 +228,10 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                                                      if obstacle else [])
         points = np.concatenate([np.asarray(seeds, float) / dp.W]
                                 + [np.linspace(a[0], b[0], grid) for a, b in boxes])
-        out, complete = line.find_line(dp, prog, S, points, grid, float(lo[0]), float(hi[0]),
-                              scene_energy(dp, modes), float(modes.c[0]), polish)
+        out, complete = line.find_line(
+            dp, prog, S, points, grid, float(lo[0]), float(hi[0]), scene_energy(dp, modes),
+            float(modes.c[0]), polish,
+            dtol=line.DERIVATIVE_TOL if fast else line.DENSE_DERIVATIVE_TOL)
         if obstacle:
             check_contact(dp, prog, out, polish, S)
         if obstacle and None not in out:
