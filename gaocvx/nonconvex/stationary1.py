@@ -165,10 +165,15 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
     # channel 3.8e-6 m high, extreme-scale campaign: slices failed from s = 9.2e-4
     # up to the range's end, the bisection's edge there was taken for the range's,
     # and the list was called proven.)
-    (a, da), (b, db) = (vals[0][0], slope(vals[0][0])), (vals[-1][0], slope(vals[-1][0]))
-    if not (at_an_end(a) or da < -(2.0 * c * (a - lo) + tol(a, a))) or \
-            not (at_an_end(b) or db > 2.0 * c * (hi - b) + tol(b, b)):
+    # (solved: F' finite and the slice accurate, as the proof takes them)
+    solved = [t for t, _ in vals if math.isfinite(slope(t))]
+    if not solved:
         complete = False
+    else:
+        a, b = solved[0], solved[-1]
+        if not (at_an_end(a) or slope(a) < -(2.0 * c * (a - lo) + tol(a, a))) or \
+                not (at_an_end(b) or slope(b) > 2.0 * c * (hi - b) + tol(b, b)):
+            complete = False
     if failed and not complete:   # (proven complete, nothing lies there)
         # (the list may then miss equilibria there: a P4 beam in a channel 3.8e-6 m
         # high had its slices fail over most of the range -- extreme-scale campaign)
