@@ -167,6 +167,37 @@ def test_a_path_says_for_each_force_whether_its_list_is_proven():
     assert [r[column] for r in rows[1:]] == ["true"] * 4
 
 
+def test_a_derivative_within_its_accuracy_is_no_proof_of_a_sign():
+    # F' = 1e-9 everywhere, trusted to 1e-8 only: it may be zero anywhere
+    assert not cover(lambda s: 1e-9, [-1.0, 0.0, 1.0], [], c=1.0, tol=1e-8, rho=1e-6,
+                     budget=600)[0]
+    assert cover(lambda s: 1e-9, [-1.0, 0.0, 1.0], [], c=0.0, tol=1e-10, rho=1e-6,
+                 budget=600)[0]
+
+
+def test_random_cubics_sampled_coarsely_are_all_proven():
+    """The property test above checks proven lists; this one that lists are proven
+    (all 100 seeded cubics, well apart from a double zero)."""
+    rng = np.random.default_rng(7)
+    proven = 0
+    for _ in range(100):
+        b, a, e = rng.uniform(0.05, 5.0), rng.uniform(-3.0, 3.0), rng.uniform(-2.0, 2.0)
+        true = _real_roots(b, a, e)
+        if len(true) == 3 and min(np.diff(true)) < 0.05:
+            proven += 1      # (a near-double zero: the bound may need more solves)
+            continue
+        dF, c = _cubic(b, a, e), max(-a, 0.0)
+        R = 1.5 * max(1.0, max(abs(x) for x in true))
+        pts = list(np.linspace(-R, R, int(rng.integers(2, 13))))
+        first = sampled_roots(dF, pts, [dF(p) for p in pts], R)
+        roots, ok = proven_roots(dF, pts, first, [], c=c, tol=1e-12 * (2 * c * R + 1.0),
+                                 rho=1e-6 * R)
+        proven += ok
+        if ok:
+            assert len(roots) >= len(true)
+    assert proven == 100
+
+
 def test_slices_failing_up_to_the_ranges_end_leave_the_list_unproven(monkeypatch, caplog):
     """P4 in a channel 5 cm either way (8 elements): three equilibria, proven.  With
     the slices made to fail on the upper 30 % of the admissible amplitudes, where
@@ -198,3 +229,59 @@ def test_slices_failing_up_to_the_ranges_end_leave_the_list_unproven(monkeypatch
     assert not any(abs(e.amplitudes[0] - upper) <= 1e-6 * abs(upper) for e in hurt)
     assert all(e.complete is False for e in hurt)
     assert "may be missing from the list" in caplog.text
+
+
+def test_slices_failing_from_the_lower_end_leave_the_list_unproven(monkeypatch):
+    """As above at the lower end: the slices fail on the lower 30 % of the channel's
+    amplitudes, where the stable beam buckled downwards lies."""
+    from gaocvx.nonconvex.slices import ContactSlices
+
+    data = scene_dict("P4", q=-1e7, axial=1.3e9, elements=8, obstacle=0.05)
+    data["obstacle"]["gap_above"] = 0.05
+    scene = Scene.from_dict(data)
+    lower = min(e.amplitudes[0] for e in equilibria(scene))
+    solve = ContactSlices.reduced
+
+    def failing(self, s0):
+        lo, hi = float(self.smin[0]), float(self.smax[0])
+        if s0[0] < lo + 0.3 * (hi - lo):
+            return math.inf, np.zeros(1), None, True
+        return solve(self, s0)
+
+    monkeypatch.setattr(ContactSlices, "reduced", failing)
+    hurt = equilibria(scene)
+    assert not any(abs(e.amplitudes[0] - lower) <= 1e-6 * abs(lower) for e in hurt)
+    assert all(e.complete is False for e in hurt)
+
+
+def test_solved_only_next_to_one_end_is_neither_proven_nor_an_optimal_edge(monkeypatch):
+    """A review's trial: P4 under a load (8 elements, no obstacle), its slices made to
+    fail on all of [-S, S] but the last 1e-7 of it.  The first and the last solved
+    amplitudes both lie "at an end" -- the upper one -- and the list was a single
+    fake edge, stable, `optimal`, proven.  Each end is now checked on its own side."""
+    from gaocvx.discrete import DiscreteProblem
+    from gaocvx.nonconvex.bounds import equilibrium_box
+    from gaocvx.nonconvex.fast import FastProgram
+    from gaocvx.nonconvex.minimum import rescale_for
+    from gaocvx.nonconvex.modes import unstable_modes
+
+    scene = Scene.from_dict(scene_dict("P4", q=-1e7, axial=1.3e9, elements=8))
+    dp = DiscreteProblem(scene, check_convexity=False)
+    modes = unstable_modes(dp)
+    dp = rescale_for(dp, modes)
+    S = float(equilibrium_box(dp, float(modes.lam[0]) * (1 - 1e-9)))
+    solve = FastProgram.reduced
+
+    def failing(self, s0):
+        if s0[0] < S * (1 - 1e-7):
+            return math.inf, np.zeros(1), None, True
+        return solve(self, s0)
+
+    monkeypatch.setattr(FastProgram, "reduced", failing)
+    try:
+        hurt = equilibria(scene)
+    except Exception as exc:       # (refusing the list is right too)
+        assert "no list of equilibria" in str(exc) or "no admissible" in str(exc), exc
+        return
+    assert all(e.complete is False for e in hurt)
+    assert not any(e.status == "optimal" for e in hurt)

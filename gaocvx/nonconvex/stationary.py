@@ -24,7 +24,10 @@ So:
    equilibrium (for k = 1: a local maximum of ``F``);
 4. with an obstacle, an end of the admissible amplitudes where ``F`` rises
    into the range is a local minimum of the energy too (stable): a beam
-   pressed flat onto an obstacle at gap 0.
+   pressed flat onto an obstacle at gap 0;
+5. with one mode, the sign bound of :mod:`.completeness` proves that no zero
+   of ``F'`` is missing (:attr:`Equilibrium.complete`), sampling more where the
+   grid does not suffice and listing the zeros it reveals.
 
 Below the limit (k = 0) the one equilibrium is the convex minimiser.
 
@@ -110,6 +113,9 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
     Returns
     -------
     list of Equilibrium
+        Each with ``complete``, the list's: True when proven to miss no
+        equilibrium (one mode; below the limit the one minimiser), False where
+        that proof failed, None with two modes.
 
     Raises
     ------
@@ -231,7 +237,10 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         out, complete = line.find_line(
             dp, prog, S, points, grid, float(lo[0]), float(hi[0]), scene_energy(dp, modes),
             float(modes.c[0]), polish,
-            dtol=line.DERIVATIVE_TOL if fast else line.DENSE_DERIVATIVE_TOL)
+            dtol=(line.DENSE_DERIVATIVE_TOL if not fast else
+                  line.CONTACT_DERIVATIVE_TOL if obstacle else line.DERIVATIVE_TOL))
+        # (the proof rests on F + c s^2 being convex: c from the verified modes)
+        complete = complete and bool(modes.verified)
         if obstacle:
             check_contact(dp, prog, out, polish, S)
         if obstacle and None not in out:

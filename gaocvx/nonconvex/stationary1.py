@@ -22,7 +22,8 @@ from .completeness import proven_roots
 from .contours import sampled_roots
 from .equilibrium import Equilibrium, same_point
 
-__all__ = ["classify", "find_line", "ROOT_TOL", "RHO", "DERIVATIVE_TOL", "DENSE_DERIVATIVE_TOL"]
+__all__ = ["classify", "find_line", "ROOT_TOL", "RHO", "DERIVATIVE_TOL", "DENSE_DERIVATIVE_TOL",
+           "CONTACT_DERIVATIVE_TOL"]
 
 log = logging.getLogger(__name__)
 
@@ -38,6 +39,9 @@ RHO = 1e-6
 # with and without an obstacle).
 DERIVATIVE_TOL = 1e-9
 DENSE_DERIVATIVE_TOL = 1e-7
+# The contact slices accept violations of 1e-9 and their active sets kink F':
+# taken ten times looser than the smooth slices.
+CONTACT_DERIVATIVE_TOL = 1e-8
 
 
 def classify(dF, r, h) -> tuple:
@@ -69,8 +73,41 @@ def classify(dF, r, h) -> tuple:
 
 def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
               dtol=DERIVATIVE_TOL) -> tuple:
-    """The equilibria with amplitudes in ``[lo, hi]`` and whether the sign bound
-    proved that the list misses none (:func:`.completeness.proven_roots`)."""
+    """The equilibria with amplitudes in ``[lo, hi]`` and the proof that none is missed.
+
+    Parameters
+    ----------
+    dp : DiscreteProblem
+        The problem in the units of the search (:func:`.minimum.rescale_for`).
+    prog
+        The reduced function: ``prog.reduced([s]) -> (F, F', u, ok)`` (``F = inf``
+        where no admissible beam has the amplitude ``s`` or the slice failed).
+    S : float
+        The amplitude range's scale (:func:`.bounds.equilibrium_box`).
+    seeds : ndarray
+        Amplitudes sampled besides the grid (a path's previous equilibria).
+    grid : int
+        Grid points over ``[lo, hi]``.
+    lo, hi : float
+        The admissible amplitudes (the linear program's range with an obstacle).
+    floor : float
+        The scene's energy scale (:func:`.minimum.scene_energy`).
+    c : float
+        The concave coefficient ``modes.c[0]`` (F + c s^2 convex).
+    polish : callable, optional
+        Polishes a zero on the whole beam (:func:`.whole_beam.polisher`).
+    dtol : float
+        F''s accuracy relative to its local size, as the proof takes it.
+
+    Returns
+    -------
+    equilibria : list of Equilibrium
+        Sorted by energy; ``[None]`` when a slice failed at a zero.
+    complete : bool
+        The sign bound's proof that no zero of F' lies farther than ``RHO S``
+        from a listed one (:func:`.completeness.proven_roots`), the range's ends
+        included.
+    """
     t0 = time.perf_counter()
     cache = {}
 
@@ -87,9 +124,17 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
         # 1.2e-8 m high, 6 elements: slices failing inside the range made a fake
         # edge, reported as an `optimal` stable equilibrium where a feasible step
         # lowers the energy by 4 % -- a campaign at extreme scales.)
+        return at_lower(t) or at_upper(t)
+
+    def end_tol():
         from .fast_check import RANGE_PAD
-        tol = max(1e-6 * (hi - lo), 4.0 * RANGE_PAD * (1.0 + max(abs(lo), abs(hi))))
-        return t <= lo + tol or t >= hi - tol
+        return max(1e-6 * (hi - lo), 4.0 * RANGE_PAD * (1.0 + max(abs(lo), abs(hi))))
+
+    def at_lower(t):
+        return t <= lo + end_tol()
+
+    def at_upper(t):
+        return t >= hi - end_tol()
 
     inside = seeds[(seeds >= lo) & (seeds <= hi)]
     if lo <= 0.0 <= hi:   # the trivial equilibrium of an unloaded beam
@@ -147,14 +192,16 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
     # unstable zero; nor F''s largest size over the range, 4e5 next to an
     # obstacle's edge, for which the bound could not come within 1e-6 S of a
     # stable zero where F'' = 81 -- both campaign scenes.)
-    def slope(s):
+    def trusted(s):   # F' where the slice is solved and accurate, else NaN
         return dF(s)[1] if math.isfinite(dF(s)[0]) and dF(s)[3] else math.nan
 
     def tol(a, b):
-        return dtol * (2.0 * c * S + max(abs(slope(a)), abs(slope(b))))
+        return dtol * (2.0 * c * S + max(abs(trusted(a)), abs(trusted(b))))
 
-    roots, complete = proven_roots(slope, [s for s, _ in vals], roots,
-                                   [inside for inside, _ in ends], c, tol, RHO * S)
+    # (the ends listed as equilibria below only: F rising into the range there)
+    held = [e for e, out in ends if dF(e)[2] is not None and
+            (dF(e)[1] > 0 if out < e else dF(e)[1] < 0)]
+    roots, complete = proven_roots(trusted, [s for s, _ in vals], roots, held, c, tol, RHO * S)
 
     failed = [t for t in sampled if not math.isfinite(dF(t)[0]) and not at_an_end(t)]
     # The proof spans the solved amplitudes; between the last of them and the
@@ -165,16 +212,20 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
     # channel 3.8e-6 m high, extreme-scale campaign: slices failed from s = 9.2e-4
     # up to the range's end, the bisection's edge there was taken for the range's,
     # and the list was called proven.)
-    # (solved: F' finite and the slice accurate, as the proof takes them)
-    solved = [t for t, _ in vals if math.isfinite(slope(t))]
-    if not solved:
+    # A gap no wider than RHO S is the proof's resolution, where an end listed as an
+    # equilibrium lies in it; each end is checked on its own side (a review's trial:
+    # slices failing on all but the last 1e-7 of the range passed "at an end" at the
+    # wrong one, and a fake edge was listed as a proven, `optimal` list).
+    solved = [t for t, _ in vals if math.isfinite(trusted(t))]
+
+    def closed(a, end, sign):   # the gap between the solved a and the range's end
+        gap = abs(a - end)
+        return gap == 0.0 or sign * trusted(a) > 2.0 * c * gap + tol(a, a) or \
+            (gap <= RHO * S and any(abs(e - a) <= RHO * S for e in held))
+
+    if not (solved and closed(solved[0], lo, -1.0) and closed(solved[-1], hi, 1.0)):
         complete = False
-    else:
-        a, b = solved[0], solved[-1]
-        if not (at_an_end(a) or slope(a) < -(2.0 * c * (a - lo) + tol(a, a))) or \
-                not (at_an_end(b) or slope(b) > 2.0 * c * (hi - b) + tol(b, b)):
-            complete = False
-    if failed and not complete:   # (proven complete, nothing lies there)
+    if failed and not complete:   # (where the proof holds, nothing lies there)
         # (the list may then miss equilibria there: a P4 beam in a channel 3.8e-6 m
         # high had its slices fail over most of the range -- extreme-scale campaign)
         log.warning("equilibria: the slices failed at %d of %d sampled amplitudes inside the "
@@ -195,7 +246,10 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
         w, slope = dp.to_physical(u)
         size = max(sum(abs(v) for v in dp.energy_parts(u).values()), floor) or scale
         res = abs(d0) * abs(outside - inside) / size
-        status = "optimal" if ok and res <= ROOT_TOL and at_an_end(outside) else "inaccurate"
+        # (the end of its own side: a lower edge next to the upper end is a fake one --
+        # slices failing on all but the last 1e-7 of the range, a review's trial)
+        real = at_lower(outside) if outside < inside else at_upper(outside)
+        status = "optimal" if ok and res <= ROOT_TOL and real else "inaccurate"
         out.append(Equilibrium(float(dp.energy(u) * dp.E0), True, [float(inside)], dp.x.copy(),
                                w, slope, float(res), status, float(dp.P), math.nan, float(dp.W)))
     for r in sorted(set(roots)):
