@@ -68,8 +68,9 @@ def cover(dF, points, known, c, tol, rho, budget) -> tuple:
         Sampled amplitudes, sorted or not: the bound covers ``[min, max]`` of the
         admissible ones.
     known : sequence of float
-        Zeros already found (and the ends of the admissible amplitudes that hold
-        an equilibrium): the parts within ``rho`` of one are not bounded further.
+        Zeros already found, and the ends of the admissible amplitudes listed as
+        equilibria (F rising into the range there): the parts within ``rho`` of
+        one are not bounded further.
     c : float
         The concave coefficient (``modes.c[0]``, >= 0).
     tol : float or callable
@@ -104,8 +105,11 @@ def cover(dF, points, known, c, tol, rho, budget) -> tuple:
         a, b, bisect = stack.pop()
         da, db = _value(dF, a), _value(dF, b)
         t = bound(a, b)
-        left = a + _reach(da - t, c, b - a)
-        right = b - _reach(-db - t, c, b - a)
+        ra, rb = _reach(da - t, c, b - a), _reach(-db - t, c, b - a)
+        # (a reach capped at the width excludes all of [a, b]: a + (b - a) may round
+        # below b)
+        left = b if ra >= b - a else a + ra
+        right = a if rb >= b - a else b - rb
         if left >= right or _near(left, right, known, rho):
             continue
         if len(sampled) >= budget:
@@ -113,7 +117,9 @@ def cover(dF, points, known, c, tol, rho, budget) -> tuple:
             continue
         march = not bisect and (min(da, db) > t or max(da, db) < -t)
         m = (left if da > t else right) if march else 0.5 * (left + right)
-        if m <= a or m >= b:     # (round-off: the interval cannot be split)
+        if march and not a < m < b:     # (a march step below round-off: the middle)
+            march, m = False, 0.5 * (left + right)
+        if not a < m < b:     # (round-off: the interval cannot be split)
             complete = False
             continue
         sampled.append(m)
@@ -154,10 +160,12 @@ def proven_roots(dF, points, roots, held, c, tol, rho, budget=None, rounds=3) ->
     points, roots : sequence of float
         The sampled amplitudes and the zeros found among them.
     held : sequence of float
-        Ends of the admissible amplitudes that hold an equilibrium.
+        Ends of the admissible amplitudes listed as equilibria.
     c, tol, rho, budget
-        As :func:`cover` (``budget`` for all rounds together; by default
-        :data:`BUDGET`).
+        As :func:`cover` (``budget`` for all rounds' bounds together, by default
+        :data:`BUDGET`; the zeros' searches of later rounds come on top).
+    rounds : int
+        Bounds tried at most, each after the zeros the last one revealed.
 
     Returns
     -------
