@@ -161,10 +161,10 @@ class Equilibrium:
     complete : bool or None
         Of the list it belongs to: True where it is proven to miss no
         equilibrium (one unstable mode: every zero of the reduced gradient
-        within ``stationary1.RHO`` of the amplitude range of a listed one, by
-        :mod:`.completeness`; below the limit the one equilibrium), False where
-        that proof failed, None where none is attempted (two unstable modes:
-        a sampling).
+        within ``stationary1.RHO`` times the amplitude bound S of a listed one's
+        amplitude, by :mod:`.completeness`; below the limit the one
+        equilibrium), False where that proof failed, None where none is
+        attempted (two unstable modes: a sampling).
     """
 
     energy: float
