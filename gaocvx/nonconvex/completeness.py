@@ -10,13 +10,15 @@ subgradient, at a kink too).  Between two sampled amplitudes ``a < b``:
 * for ``s <= b``: ``F'(s) <= F'(b) + 2 c (b - s)``, so none lies in
   ``(b + F'(b) / (2 c), b]`` when ``F'(b) < 0``.
 
-What neither bound excludes (the *undecided* part of ``[a, b]``) is split at its
-midpoint and both halves are bounded again, until every part is excluded or lies
-within ``rho`` of a zero already found.  The grid's sampling then becomes a
+What neither bound excludes (the *undecided* part of ``[a, b]``) is sampled again
+-- at the edge of what the ends exclude where both bound the same side, else at
+its middle -- and both parts are bounded again, until every part is excluded or
+lies within ``rho`` of a zero already found.  The grid's sampling then becomes a
 proof: every equilibrium with one unstable mode lies within ``rho`` of a listed
 one, given the fixed-amplitude solves' accuracy (``tol``: a derivative no larger
-than it counts as possibly zero).  The proof fails where a solve failed inside
-the admissible range, or where ``budget`` more solves did not finish it: next to
+than it counts as possibly zero).  A failed solve between two solved amplitudes
+is bounded by them; the proof fails where a solve it needed failed, or where
+``budget`` more solves did not finish it: next to
 an unstable zero the bound excludes a length ``|F'(s)| / (2 c)``, proportional to
 the distance times ``1 - Phi'' / (2 c)``, which is small just above the mode's
 load (``Phi''`` close to ``2 c``).

@@ -215,7 +215,7 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
     # A gap no wider than RHO S is the proof's resolution, where an end listed as an
     # equilibrium lies in it; each end is checked on its own side (a review's trial:
     # slices failing on all but the last 1e-7 of the range passed "at an end" at the
-    # wrong one, and a fake edge was listed as a proven, `optimal` list).
+    # wrong one, and a fake edge was listed, `optimal`, in a list called proven).
     solved = [t for t, _ in vals if math.isfinite(trusted(t))]
 
     def closed(a, end, sign):   # the gap between the solved a and the range's end
