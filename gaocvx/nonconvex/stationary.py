@@ -114,8 +114,9 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
     -------
     list of Equilibrium
         Each with ``complete``, the list's: True when proven to miss no
-        equilibrium (one mode; below the limit the one minimiser), False where
-        that proof failed, None with two modes.
+        equilibrium (one mode, :mod:`.completeness`; two without an obstacle,
+        :mod:`.completeness2`; below the limit the one minimiser), False where
+        that proof failed, None with two modes and an obstacle or channel.
 
     Raises
     ------
@@ -201,13 +202,18 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         # construction).
         smin, smax = admissible(prog)
         lo, hi = np.maximum(lo, smin), np.minimum(hi, smax)
-    complete = None    # (two modes: a sampling, no proof)
+    dtol = (line.DENSE_DERIVATIVE_TOL if not fast else
+            line.CONTACT_DERIVATIVE_TOL if obstacle else line.DERIVATIVE_TOL)
     if modes.k == 2:
         from .stationary2 import find_plane
         glob = global_minimisers(dp, modes) if obstacle else []
+        # (the ellipses' proof without an obstacle, :mod:`.completeness2`; with one,
+        # a sampling: complete None)
+        proof = {"dtol": dtol, "complete": None}
         out = find_plane(dp, prog, S, floor=scene_energy(dp, modes), modes=modes,
                          starts=[np.asarray(e.amplitudes, float) for e in glob], box=(lo, hi),
-                         minimisers=glob)
+                         minimisers=glob, proof=proof)
+        complete = proof["complete"]
 
         def own_search(d):
             # the square [-1, 1]^2 of d's units, within its admissible amplitudes
@@ -236,11 +242,11 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                                 + [np.linspace(a[0], b[0], grid) for a, b in boxes])
         out, complete = line.find_line(
             dp, prog, S, points, grid, float(lo[0]), float(hi[0]), scene_energy(dp, modes),
-            float(modes.c[0]), polish,
-            dtol=(line.DENSE_DERIVATIVE_TOL if not fast else
-                  line.CONTACT_DERIVATIVE_TOL if obstacle else line.DERIVATIVE_TOL))
+            float(modes.c[0]), polish, dtol=dtol)
+    if complete is not None:
         # (the proof rests on F + c s^2 being convex: c from the verified modes)
         complete = complete and bool(modes.verified)
+    if modes.k == 1:
         if obstacle:
             check_contact(dp, prog, out, polish, S)
         if obstacle and None not in out:

@@ -1,8 +1,10 @@
 """Equilibria with two unstable modes (k = 2): zeros of the reduced gradient in the plane.
 
 The equilibria are the stationary points of ``F(s1, s2)`` (nonconvex.md; see
-:mod:`.stationary` for k = 1).  In two dimensions no bracketing proves that
-every zero is found, so this search is a careful sampling, not a proof:
+:mod:`.stationary` for k = 1).  In two dimensions no bracketing finds every
+zero, so this search is a careful sampling; without an obstacle the monotone
+gradient's ellipses (:mod:`.completeness2`, step 7) then prove that none is
+missing, or say that they could not:
 
 1. ``∇F`` on a ``GRID2 x GRID2`` grid of the square ``[-S, S]^2``
    (:func:`.bounds.equilibrium_box`: every equilibrium has ``|s| <= S``; with
@@ -65,7 +67,10 @@ every zero is found, so this search is a careful sampling, not a proof:
    size of the equilibria found there; their ``optimal`` equilibria are added.
    And where the flat beam is listed stable and ``optimal``, :func:`.stationary.equilibria`
    searches its neighbourhood again in a problem of its own scale
-   (:func:`.zooms.own_scale`).
+   (:func:`.zooms.own_scale`);
+7. without an obstacle (``proof``), the ellipses of :mod:`.completeness2` cover
+   the square, Newton's method starting from every cell they leave open, and
+   the list is proven complete or not.
 
 Examples
 --------
@@ -95,7 +100,8 @@ from .descents import descents as _descents, in_square as _in_square, passes as 
 from .equilibrium import Equilibrium, same_point
 from .obstacle_checks import at_global, check_contact, exact_flat
 from .probes import curvature as _curvature, least_rise as _least_rise
-from .stationary1 import ROOT_TOL
+from .completeness2 import prove
+from .stationary1 import RHO, ROOT_TOL
 from .whole_beam import polisher, settle as settle_beams
 
 __all__ = ["find_plane", "GRID2"]
@@ -107,7 +113,7 @@ GRID2 = 25  # odd: (0, 0) is a grid point
 
 def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
                starts=(), box=None, minimisers=(), zoom: bool = True,
-               flat: bool = True) -> list:
+               flat: bool = True, proof: dict | None = None) -> list:
     """Every zero of ``∇F`` found in ``[-S, S]^2`` (see the module's notes).
 
     ``floor`` [in the program's energy unit]: the smallest energy scale residuals are
@@ -124,7 +130,10 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
     zero curves of one component of ``∇F`` are added on every grid
     (:func:`.contours.curve_zeros`).  ``zoom``: the second searches of
     :mod:`.zooms`; ``flat``: ``s = 0`` among the seeds and tried as an edge
-    minimum (False in a cluster's box).
+    minimum (False in a cluster's box).  ``proof``: without an obstacle, a dict
+    whose ``"dtol"`` (the gradient's accuracy, relative to its local size) asks
+    for the ellipses' proof that no zero is missing (:mod:`.completeness2`, with
+    ``modes``), its verdict returned in ``proof["complete"]``.
     """
     t0 = time.perf_counter()
     cache = {}
@@ -260,6 +269,18 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
             # (Newton's end is dropped where F is infinite there: no end, no image)
             out = mirror.complete_pairs(dp, modes, grad, out, S, lambda s: next(
                 (settle(end) for end in _newton(grad, hessian, [s], S)), None))
+    if proof is not None and dp.contact != "obstacle" and modes is not None:
+        found = []
+
+        def search(seeds):   # (Newton's method from the proof's open cells)
+            new = at_roots(_newton(grad, hessian, seeds, S), S,
+                           [e.amplitudes for e in out + found])
+            found.extend(new)
+            return [e.amplitudes for e in new]
+
+        proof["complete"] = prove(grad, search, [e.amplitudes for e in out], grids[0],
+                                  list(cache), modes.c, proof["dtol"], S, RHO * S)
+        out += found
     if zoom:
         # (near the flat beam the slices' beams are the scene's accuracy: each
         # polished on the whole beam, where that succeeds, and listed once)

@@ -1,0 +1,325 @@
+"""A proof that a two-mode list of equilibria misses none: the monotone gradient's ellipses.
+
+With two unstable modes the energy is ``Psi(s, v) - c_1 s_1^2 - c_2 s_2^2`` with
+``Psi`` convex (nonconvex.md), so ``Phi(s) = F(s) + s'Cs`` (``C = diag(c)``) is
+convex and its gradient ``∇F(s) + 2 C s`` is a monotone operator:
+``(∇F(x) + 2Cx - ∇F(p) - 2Cp) . (x - p) >= 0``.  At a zero ``x`` of ``∇F``
+this reads ``2 d'Cd >= g . d`` with ``d = x - p`` and ``g = ∇F(p)``, so no zero
+lies in the open ellipse
+
+    ``R_p = {x : 2 d'Cd + t |d| < g . d}``
+
+(``t``: the accuracy of ``g``; a true gradient within ``t`` of ``g`` gives the
+same), which has ``p`` on its boundary and reaches ``|g| / (2 min c)`` from it.
+``R_p`` is convex and ``p`` lies in its closure when ``|g| > t``, so a
+rectangle none of whose corners but ``p`` lies outside ``R_p`` lies in
+``R_p ∪ {p}``, and ``p`` is no zero.  One ellipse seldom holds a whole grid
+cell (its tangent at ``p`` runs along ``p``'s edges when ``g`` points along an
+axis): a cell is split in sub-rectangles (no solves), each held by the ellipse
+of any sample, and where that fails it is sampled at its middle and the middles
+of its edges and split in four, until every cell is held, or lies within
+``rho`` of a zero already found (or, smaller than ``rho / 10``, within ``2 rho``:
+the ellipses that hold points on the rim of the disc of radius ``rho`` come
+from samples inside it, which no cell there takes).  This is the one-mode sign
+bound (:mod:`.completeness`) in the plane: the grid's sampling becomes a proof
+that every equilibrium in the rectangle lies within ``2 rho`` of a listed one,
+given the fixed-amplitude solves' accuracy.  A cell that shrinks below
+``rho / 10`` far from every known zero holds a zero not yet found (or round-off
+defeats the ellipses there): :func:`proven_zeros` hands its middle to the
+caller's search and tries again.
+
+Examples
+--------
+``F(s) = (s_1^2 + s_2^2)^2 / 4 - s_1^2 - s_2^2 / 2 + s_1 / 10`` (``c = (1, 1/2)``:
+``F + s_1^2 + s_2^2 / 2`` is convex) has five stationary points: three on
+``s_2 = 0`` (the real zeros of ``s^3 - 2 s + 0.1``) and ``(0.1, ±0.99^0.5)``.
+Given all five, the ellipses prove that there is no other in ``[-2, 2]^2``; with
+one of them left out they do not:
+
+>>> import numpy as np
+>>> grad = lambda s: np.array([s[0] * (s @ s) - 2 * s[0] + 0.1, s[1] * (s @ s) - s[1]])
+>>> zeros = [[r, 0.0] for r in np.roots([1, 0, -2, 0.1]).real] + [[0.1, 0.99**0.5],
+...                                                                  [0.1, -0.99**0.5]]
+>>> axes = [np.linspace(-2, 2, 9)] * 2
+>>> ok, _, _ = cover(grad, axes, zeros, c=[1.0, 0.5], tol=1e-12, rho=1e-6, budget=20000)
+>>> missing, _, open_cells = cover(grad, axes, zeros[1:], c=[1.0, 0.5], tol=1e-12,
+...                                rho=1e-6, budget=20000)
+>>> ok, missing, bool(min(np.linalg.norm(o - zeros[0]) for o in open_cells) < 2e-6)
+(True, False, True)
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["cover", "proven_zeros", "prove", "BUDGET"]
+
+# More solves the proof may take (a two-mode list takes 700-2000 on its grids).
+BUDGET = 4000
+# Sub-rectangles of a cell tried before it is sampled again: 2^GEOMETRY a side.
+GEOMETRY = 3
+# Samples on each ring around a known zero.
+RING_POINTS = 8
+
+
+def cover(grad, axes, known, c, tol, rho, budget, samples=()) -> tuple:
+    """Whether the ellipses prove that ``∇F`` has no zero beyond ``rho`` of ``known``.
+
+    Parameters
+    ----------
+    grad : callable
+        ``grad(s) -> ∇F(s)`` (a 2-vector; NaN where the fixed-amplitude solve
+        failed); cached by the caller.
+    axes : pair of sorted sequences
+        The grid whose cells are to be covered: the rectangle from its first to
+        its last points.
+    known : sequence of 2-vectors
+        Zeros already found: cells within ``rho`` of one are not bounded further.
+    c : pair of float
+        The concave coefficients (``modes.c``, >= 0).
+    tol : float or callable
+        The gradient's accuracy: ``tol(p, g)`` at a sample ``p`` with gradient ``g``.
+    rho : float
+        The distance from a known zero within which zeros are not told apart.
+    budget : int
+        At most this many more evaluations of ``grad``.
+    samples : sequence of 2-vectors
+        More points already solved (their ellipses help; no solve is spent).
+
+    Returns
+    -------
+    complete : bool
+        True when every cell is held by ellipses or lies within ``rho`` of ``known``
+        (within ``2 rho`` for cells smaller than ``rho / 10``): no zero of ``∇F``
+        lies in the rectangle farther than ``2 rho`` from ``known``.
+    sampled : list of ndarray
+        The points sampled here.
+    open_cells : list of ndarray
+        The middles of cells smaller than ``rho / 10`` far from every known zero (a
+        zero not found yet), and of cells the budget left undecided.
+    """
+    c = np.asarray(c, float)
+    bound = tol if callable(tol) else (lambda p, g: tol)
+    known = np.asarray(known, float).reshape(-1, 2)
+    P, G, T = [], [], []
+    seen = set()
+    sampled, open_cells = [], []
+    failed = False
+
+    def add(p) -> bool:
+        key = (float(p[0]), float(p[1]))
+        if key in seen:
+            return True
+        seen.add(key)
+        g = np.asarray(grad(np.array(key)), float)
+        if not np.all(np.isfinite(g)):
+            return False
+        P.append(key)
+        G.append(g)
+        T.append(float(bound(np.array(key), g)))
+        return True
+
+    ax0, ax1 = (np.asarray(a, float) for a in axes)
+    ok = all([add((a, b)) for a in ax0 for b in ax1] + [add(p) for p in samples])
+    if not ok:
+        failed = True
+    # rings around each known zero, radii doubling from rho / 2 to the grid's step,
+    # RING_POINTS on each: at a distance r from a zero the ellipses that hold a
+    # point come from samples between it and the zero (0.3 r to r from it), which
+    # the cells' own splits, square and skipping the disc within rho, spread too
+    # thinly (a P1 beam with five equilibria: 3100 solves; with the rings, 1900)
+    step = max(float(np.max(np.diff(ax0))), float(np.max(np.diff(ax1))))
+    for z in known:
+        r = 0.5 * rho
+        while r < step and len(sampled) < budget:
+            for a in np.arange(RING_POINTS) * (2.0 * np.pi / RING_POINTS):
+                p = (z[0] + r * math.cos(a), z[1] + r * math.sin(a))
+                if ax0[0] <= p[0] <= ax0[-1] and ax1[0] <= p[1] <= ax1[-1] and \
+                        (float(p[0]), float(p[1])) not in seen:
+                    sampled.append(np.array(p))
+                    failed |= not add(p)
+            r *= 2.0
+    cells = [(ax0[i], ax0[i + 1], ax1[j], ax1[j + 1])
+             for i in range(len(ax0) - 1) for j in range(len(ax1) - 1)]
+    # in rounds, all cells of a size together: a cell is split only after its
+    # neighbours' samples of that size are in (one at a time, depth first, a cell
+    # was split down to 1e-7 of its size that its neighbours' samples held)
+    while cells:
+        arrays = _usable(np.array(P), np.array(G), np.array(T), c)
+        cells = [q for q in cells if not _near(q, known, rho) and not _held(q, arrays, c)]
+        children = []
+        for x0, x1, y0, y1 in cells:
+            mx, my = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
+            if max(x1 - x0, y1 - y0) < 0.1 * rho or not (x0 < mx < x1 and y0 < my < y1):
+                # (a cell on the disc's rim: the ellipses that hold points there come
+                # from samples inside it, which no cell there takes; the proof's
+                # resolution is 2 rho)
+                if not _near((mx, mx, my, my), known, 2.0 * rho):
+                    open_cells.append(np.array([mx, my]))   # (a zero not found, or round-off)
+                continue
+            if len(sampled) >= budget:
+                open_cells.append(np.array([mx, my]))
+                continue
+            new = [(mx, my), (mx, y0), (mx, y1), (x0, my), (x1, my)]
+            fresh = [p for p in new if (float(p[0]), float(p[1])) not in seen]
+            sampled += [np.array(p) for p in fresh]
+            if not all([add(p) for p in fresh]):
+                failed = True     # (a failed solve inside: nothing is known there)
+                continue
+            children += [(x0, mx, y0, my), (mx, x1, y0, my), (x0, mx, my, y1), (mx, x1, my, y1)]
+        cells = children
+    return not failed and not open_cells, sampled, open_cells
+
+
+def proven_zeros(grad, axes, zeros, search, c, tol, rho, budget=None, rounds=3,
+                 samples=()) -> tuple:
+    """The zeros of ``∇F`` with the ellipses' proof that none is missing.
+
+    :func:`cover` with ``zeros`` known; where a cell shrinks below ``rho / 10`` far
+    from them, ``search`` (the caller's Newton's method) is started at its
+    middle and the zeros it returns are added, and the proof tried again,
+    ``rounds`` times at most (the samples are kept: a second round costs only
+    the cells the first left open).
+
+    Parameters
+    ----------
+    grad, axes, c, tol, rho
+        As :func:`cover`.
+    zeros : sequence of 2-vectors
+        The zeros found so far.
+    search : callable
+        ``search(seeds) -> list of 2-vectors``: zeros found from ``seeds``.
+    budget : int, optional
+        Solves for all rounds' bounds together (default :data:`BUDGET`).
+    rounds : int
+        Bounds tried at most.
+    samples : sequence of 2-vectors
+        Points already solved (the searches' grids).
+
+    Returns
+    -------
+    zeros : list of ndarray
+        The zeros, with those the open cells revealed.
+    complete : bool
+        The last round's verdict.
+    """
+    budget = BUDGET if budget is None else budget
+    zeros = [np.asarray(z, float) for z in zeros]
+    samples = [np.asarray(p, float) for p in samples]
+    complete = False
+    for _ in range(rounds):
+        complete, sampled, open_cells = cover(grad, axes, zeros, c, tol, rho, budget, samples)
+        budget -= len(sampled)
+        samples += sampled
+        if complete or not open_cells or budget <= 0:
+            break
+        count = len(zeros)
+        for z in search(open_cells):
+            z = np.asarray(z, float)
+            if all(np.linalg.norm(z - q) > rho for q in zeros):
+                zeros.append(z)
+        if len(zeros) == count:
+            break       # (nothing new: another round would only repeat this one)
+    return zeros, complete
+
+
+def prove(grad, search, zeros, axes, samples, c, dtol, S, rho) -> bool:
+    """Whether the ellipses prove a two-mode list complete (:func:`proven_zeros`).
+
+    Parameters
+    ----------
+    grad : callable
+        ``grad(s) -> (F, ∇F, beam, ok)``: the fixed-amplitude solve (cached by the
+        caller); a slice that failed (``F`` not finite) or is not accurate
+        (``ok`` false) counts as unknown.
+    search : callable
+        ``search(seeds) -> amplitudes`` of the zeros found from ``seeds`` and
+        listed by the caller.
+    zeros : sequence of 2-vectors
+        The listed zeros' amplitudes.
+    axes : pair of arrays
+        The grid over ``[-S, S]^2``.
+    samples : sequence of 2-vectors
+        Amplitudes already solved.
+    c : pair of float
+        The modes' concave coefficients.
+    dtol : float
+        The gradient's accuracy relative to its local size (the concave part's
+        ``2 max(c) S``, or ``|∇F|``), as with one mode.
+    S, rho : float
+        The amplitude bound and the distance within which zeros are one.
+    """
+    c = np.asarray(c, float)
+
+    def trusted(s):
+        F, d, _, ok = grad(s)
+        return np.asarray(d, float) if math.isfinite(F) and ok else np.full(2, np.nan)
+
+    def tol(p, d):
+        return dtol * (2.0 * float(np.max(c)) * S + float(np.linalg.norm(d)))
+
+    _, complete = proven_zeros(trusted, axes, zeros, search, c, tol, rho,
+                               samples=[np.asarray(p, float) for p in samples])
+    return complete
+
+
+def _usable(P, G, T, c):
+    """The samples whose gradient exceeds its accuracy, with their ellipses' boxes.
+
+    ``R_p`` lies in ``{d : (d - m)'C(d - m) < g'C^-1 g / 16}``, ``m = C^-1 g / 4``:
+    the box ``m +- (g'C^-1 g / (16 c_i))^(1/2)`` around ``p`` (unbounded where
+    ``c_i = 0``).
+    """
+    keep = np.linalg.norm(G, axis=1) > T
+    P, G, T = P[keep], G[keep], T[keep]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = np.where(c > 0, 1.0 / np.where(c > 0, c, 1.0), np.inf)
+        size = (G * G) @ np.where(np.isfinite(inv), inv, 0.0) / 16.0
+        centre = P + np.where(np.isfinite(inv), G * inv, 0.0) / 4.0
+        half = np.sqrt(size[:, None] * inv[None, :])
+    lo = np.where(np.isfinite(half), centre - half, -np.inf)
+    hi = np.where(np.isfinite(half), centre + half, np.inf)
+    return P, G, T, lo, hi
+
+
+def _held(cell, arrays, c) -> bool:
+    """Whether every sub-rectangle of ``cell`` (2^j a side, j <= GEOMETRY) is held
+    by one sample's ellipse (its corners inside, but the sample itself)."""
+    P, G, T, lo, hi = arrays
+    x0, x1, y0, y1 = cell
+    # the samples whose ellipse's box meets the cell
+    near = (lo[:, 0] < x1) & (hi[:, 0] > x0) & (lo[:, 1] < y1) & (hi[:, 1] > y0)
+    if not np.any(near):
+        return False
+    P, G, T = P[near], G[near], T[near]
+    todo = np.ones((1, 1), bool)      # sub-rectangles not held yet, on the finest lattice
+    for j in range(GEOMETRY + 1):
+        m = 2 ** j
+        if j:
+            todo = np.repeat(np.repeat(todo, 2, axis=0), 2, axis=1)
+        xs, ys = np.linspace(x0, x1, m + 1), np.linspace(y0, y1, m + 1)
+        X, Y = np.meshgrid(xs, ys, indexing="ij")
+        D = np.stack([X.ravel(), Y.ravel()], axis=1)[:, None, :] - P[None, :, :]
+        dist = np.linalg.norm(D, axis=2)
+        inside = 2.0 * (c[0] * D[..., 0] ** 2 + c[1] * D[..., 1] ** 2) + T * dist \
+            < np.einsum("ijk,jk->ij", D, G)
+        inside |= dist == 0.0      # the sample itself: no zero (|g| > t)
+        inside = inside.reshape(m + 1, m + 1, -1)
+        held = np.any(inside[:-1, :-1] & inside[1:, :-1] & inside[:-1, 1:] & inside[1:, 1:],
+                      axis=2)
+        todo &= ~held
+        if not todo.any():
+            return True
+    return False
+
+
+def _near(cell, known, rho) -> bool:
+    # the cell's corners all within rho of one known zero (the disc is convex)
+    if not len(known):
+        return False
+    x0, x1, y0, y1 = cell
+    corners = np.array([[x0, y0], [x0, y1], [x1, y0], [x1, y1]])
+    d = np.linalg.norm(corners[None, :, :] - known[:, None, :], axis=2)
+    return bool(np.any(np.all(d <= rho, axis=1)))
