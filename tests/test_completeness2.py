@@ -206,3 +206,21 @@ def test_a_two_mode_list_with_an_obstacle_is_a_sampling():
     data = {**TWO_MODES, "obstacle": {"gap": 0.002}}
     eqs = equilibria(Scene.from_dict(data))
     assert eqs and len(eqs[0].amplitudes) == 2 and all(e.complete is None for e in eqs)
+
+
+def test_the_cli_says_whether_a_two_mode_list_is_proven(tmp_path, capsys, monkeypatch):
+    import json
+    from gaocvx.cli import main
+    path = tmp_path / "p1.toml"
+    path.write_text('[beam]\nmodel = "gao"\nsupports = "P1"\nlength = 1.0\nE = 2.1e11\nnu = 0.3\n'
+                    'half_thickness = 0.1\nwidth = 1.0\n[load]\nq = -3e8\naxial = 1.1e10\n'
+                    '[mesh]\nelements = 8\n')
+    assert main(["equilibria", str(path), "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert [json.loads(x)["complete"] for x in out.splitlines()] == [True] * 5
+    assert "not proven complete" not in err
+    monkeypatch.setattr(completeness2, "BUDGET", 0)      # no solve left for the proof
+    assert main(["equilibria", str(path), "--json"]) == 0   # (the entries are still right)
+    out, err = capsys.readouterr()
+    assert [json.loads(x)["complete"] for x in out.splitlines()] == [False] * 5
+    assert "the list is not proven complete (the reduced gradient's bounds" in err
