@@ -39,6 +39,11 @@ def _quartic(b, a1, a2, M, q):
 
 
 def _zeros(grad, jac, R, starts=25):
+    with np.errstate(over="ignore", invalid="ignore"):   # (starts whose steps diverge)
+        return _zeros_from(grad, jac, R, starts)
+
+
+def _zeros_from(grad, jac, R, starts):
     found = []
     for x in np.linspace(-R, R, starts):
         for y in np.linspace(-R, R, starts):
