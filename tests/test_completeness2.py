@@ -229,3 +229,17 @@ def test_the_cli_says_whether_a_two_mode_list_is_proven(tmp_path, capsys, monkey
     out, err = capsys.readouterr()
     assert [json.loads(x)["complete"] for x in out.splitlines()] == [False] * 5
     assert "the list is not proven complete (the reduced gradient's bounds" in err
+
+
+def test_an_inaccurate_copy_of_a_listed_saddle_is_dropped_from_a_proven_list():
+    """A P2 beam on a bonded bed at 1.001 lambda_2 (a helper's independent campaign):
+    three equilibria, by an independent energy's multi-start; the list once held a
+    fourth, an `inaccurate` copy of the saddle 5.4e-6 S from it.  The proof with the
+    `optimal` entries alone shows there is no equilibrium of its own there."""
+    data = {"beam": {"model": "gao", "supports": "P2", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                     "half_thickness": 0.1, "width": 1.0},
+            "load": {"q": -1e7, "axial": 7379950132.031914}, "mesh": {"elements": 16},
+            "foundation": {"gap": 0.001, "stiffness": 1.4e10, "kind": "bilateral"}}
+    eqs = equilibria(Scene.from_dict(data))
+    assert len(eqs) == 3 and all(e.status == "optimal" and e.complete is True for e in eqs)
+    assert [e.stable for e in eqs].count(True) == 2
