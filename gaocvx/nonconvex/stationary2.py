@@ -43,8 +43,8 @@ missing, or say that they could not:
    by Nelder-Mead on ``F`` (inadmissible amplitudes count as ``+inf``) and,
    when it is no zero found by step 2, reported as a stable equilibrium if no
    admissible probe around it within 1e-9 S is lower (a local minimum of ``F``
-   is one of the energy: ``Pi(s, v) >= F(s) >= F(s*)`` nearby).  Unstable
-   equilibria at a kink or an edge are not searched;
+   is one of the energy: ``Pi(s, v) >= F(s) >= F(s*)`` nearby; :mod:`.edges`).
+   Unstable equilibria at a kink or an edge are not searched;
 5. with an obstacle, the mirror images (x -> L - x) of the equilibria found,
    where mesh and supports are symmetric, seed steps 2 and 4 again, and every
    equilibrium called ``optimal`` must pass the global method's optimality
@@ -96,12 +96,13 @@ import numpy as np
 
 from . import images as mirror, zooms
 from .bounds import estimate_boxes, zoom_boxes
+from .completeness2 import prove
 from .contours import curve_zeros, line_zeros
-from .descents import descents as _descents, in_square as _in_square, passes as _passes
+from .descents import descents as _descents, passes as _passes
+from .edges import edge_minima
 from .equilibrium import Equilibrium, same_point
 from .obstacle_checks import at_global, check_contact, exact_flat
 from .probes import curvature as _curvature, least_rise as _least_rise
-from .completeness2 import prove
 from .stationary1 import RHO, ROOT_TOL
 from .whole_beam import polisher, settle as settle_beams
 
@@ -220,13 +221,13 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
         def found():
             return [np.asarray(e.amplitudes) for e in out]
         for axes in grids:
-            out += _edge_minima(dp, grad, axes, S, found(), floor)
-        out += _edge_minima(dp, grad, None, S, found(), floor, list(starts) + descents)
+            out += edge_minima(dp, grad, axes, S, found(), floor)
+        out += edge_minima(dp, grad, None, S, found(), floor, list(starts) + descents)
         # The flat beam at gap 0 may be a minimum whose basin is far below the
         # grid's step (F rises over 1e-9 S, then falls: a P4 beam under a load
         # table, 8 elements): tried with a simplex of that size.
         if flat:
-            out += _edge_minima(dp, grad, None, S, found(), floor, [np.zeros(2)], 1e-8)
+            out += edge_minima(dp, grad, None, S, found(), floor, [np.zeros(2)], 1e-8)
         if zoom:
             # rows of minima closer than the grid's step, searched again on a finer
             # grid over their box (:mod:`.zooms`; without the modes' boxes, images
@@ -240,7 +241,7 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
         images = mirror.seeds(dp, modes, grad, out, S) if modes is not None else []
         if images:
             out += at_roots(_newton(grad, hessian, images, S), S, found())
-            out += _edge_minima(dp, grad, None, S, found(), floor, images)
+            out += edge_minima(dp, grad, None, S, found(), floor, images)
         check_contact(dp, prog, out, polish, S)
         at_global(dp, prog, out, minimisers, lambda s: grad(np.asarray(s, float))[0], S)
         if modes is not None:
@@ -421,64 +422,3 @@ def _axis(lo: float, hi: float, grid: int) -> np.ndarray:
         axis[i] = 0.0
         return axis
     return np.union1d(axis, [0.0])
-
-
-def _edge_minima(dp, grad, axes, S, roots, floor, starts=(), step=1e-3) -> list:
-    """Stable equilibria at a kink or an edge of the admissible amplitudes (step 4).
-
-    Without them a beam pressed flat onto an obstacle at gap 0 with two unstable
-    modes had no equilibrium at all (campaign draws: P1 and P4 in a channel with
-    gap 0, both methods returned an empty list).  Their residual is ``|∇F|``
-    times the probes' radius relative to the energy scale, as for k = 1.
-    """
-    import scipy.optimize as so
-
-    out = []
-    f = _in_square(grad, S)
-
-    for s0, h in _local_minima(grad, axes) if axes is not None else \
-            [(np.asarray(x, float), np.full(2, step * S)) for x in starts]:
-        simplex = np.array([s0, s0 + [0.25 * h[0], 0.0], s0 + [0.0, 0.25 * h[1]]])
-        # (fatol 0 ran every search to maxiter: 5322 of a scene's 5267 solves;
-        # F to 1e-14 of the scale is what the probes below can resolve anyway)
-        with np.errstate(invalid="ignore", over="ignore"):
-            res = so.minimize(f, s0, method="Nelder-Mead",
-                              options=dict(initial_simplex=simplex, xatol=1e-12 * S,
-                                           fatol=1e-14 * (abs(f(s0)) + floor + 1e-300),
-                                           maxiter=400))
-        s = np.asarray(res.x, float)
-        if not math.isfinite(f(s)) or \
-                any(same_point(s, r, S) for r in roots) or \
-                any(same_point(s, e.amplitudes, S) for e in out):
-            continue
-        F0, d, u, ok = grad(s)
-        e = 1e-9 * S
-        probes = [f(s + e * np.array([math.cos(t), math.sin(t)]))
-                  for t in np.linspace(0, 2 * math.pi, 8, endpoint=False)]
-        if min(probes) < F0:
-            continue   # (not a minimum at this resolution: a zero of ∇F is step 2's)
-        size = max(sum(abs(v) for v in dp.energy_parts(u).values()), floor) or 1.0
-        resid = float(np.linalg.norm(d)) * e / size
-        status = "optimal" if ok and resid <= ROOT_TOL else "inaccurate"
-        w, slope = dp.to_physical(u)
-        out.append(Equilibrium(float(dp.energy(u) * dp.E0), True, [float(x) for x in s],
-                               dp.x.copy(), w, slope, resid, status, float(dp.P),
-                               math.nan, float(dp.W)))
-    return out
-
-
-def _local_minima(grad, axes) -> list:
-    """Grid points whose ``F`` is lowest among their admissible neighbours, each with
-    the spans ``(h0, h1)`` of its neighbourhood (a Nelder-Mead simplex's size)."""
-    n, m = len(axes[0]), len(axes[1])
-    F = np.array([[grad(np.array([a, b]))[0] for b in axes[1]] for a in axes[0]])
-    F = np.where(np.isfinite(F), F, np.inf)
-    out = []
-    for i in range(n):
-        for j in range(m):
-            if math.isfinite(F[i, j]) and \
-                    F[i, j] <= F[max(i - 1, 0):i + 2, max(j - 1, 0):j + 2].min():
-                h = np.array([axes[0][min(i + 1, n - 1)] - axes[0][max(i - 1, 0)],
-                              axes[1][min(j + 1, m - 1)] - axes[1][max(j - 1, 0)]])
-                out.append((np.array([axes[0][i], axes[1][j]]), h))
-    return out
