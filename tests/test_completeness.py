@@ -141,20 +141,28 @@ def test_lists_say_whether_they_are_proven_complete():
     assert [e.complete for e in below] == [True]      # convex: its one minimiser
 
 
+def cli_says_whether_proven(path, capsys, monkeypatch, module, count, note):
+    """``gaocvx equilibria --json`` on ``path``: ``count`` entries proven complete,
+    no note; with ``module``'s budget 0, the same entries not proven and ``note``
+    on stderr."""
+    assert main(["equilibria", str(path), "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert [json.loads(x)["complete"] for x in out.splitlines()] == [True] * count
+    assert "not proven complete" not in err
+    monkeypatch.setattr(module, "BUDGET", 0)             # no solve left for the proof
+    assert main(["equilibria", str(path), "--json"]) == 0   # (the entries are still right)
+    out, err = capsys.readouterr()
+    assert [json.loads(x)["complete"] for x in out.splitlines()] == [False] * count
+    assert note in err
+
+
 def test_cli_reports_a_list_not_proven_complete(tmp_path, capsys, monkeypatch):
     path = tmp_path / "p4.toml"
     path.write_text('[beam]\nmodel = "gao"\nsupports = "P4"\nlength = 1.0\nE = 2.1e11\nnu = 0.3\n'
                     'half_thickness = 0.1\nwidth = 1.0\n[load]\nq = -1e7\naxial = 1.3e9\n'
                     '[mesh]\nelements = 8\n')
-    assert main(["equilibria", str(path), "--json"]) == 0
-    out, err = capsys.readouterr()
-    assert [json.loads(x)["complete"] for x in out.splitlines()] == [True] * 3
-    assert "not proven complete" not in err
-    monkeypatch.setattr(completeness, "BUDGET", 0)       # no solve left for the proof
-    assert main(["equilibria", str(path), "--json"]) == 0   # (the entries are still right)
-    out, err = capsys.readouterr()
-    assert [json.loads(x)["complete"] for x in out.splitlines()] == [False] * 3
-    assert "the list is not proven complete" in err
+    cli_says_whether_proven(path, capsys, monkeypatch, completeness, 3,
+                            "the list is not proven complete")
 
 
 def test_a_path_says_for_each_force_whether_its_list_is_proven():

@@ -214,21 +214,13 @@ def test_a_two_mode_list_with_an_obstacle_is_a_sampling():
 
 
 def test_the_cli_says_whether_a_two_mode_list_is_proven(tmp_path, capsys, monkeypatch):
-    import json
-    from gaocvx.cli import main
+    from test_completeness import cli_says_whether_proven
     path = tmp_path / "p1.toml"
     path.write_text('[beam]\nmodel = "gao"\nsupports = "P1"\nlength = 1.0\nE = 2.1e11\nnu = 0.3\n'
                     'half_thickness = 0.1\nwidth = 1.0\n[load]\nq = -3e8\naxial = 1.1e10\n'
                     '[mesh]\nelements = 8\n')
-    assert main(["equilibria", str(path), "--json"]) == 0
-    out, err = capsys.readouterr()
-    assert [json.loads(x)["complete"] for x in out.splitlines()] == [True] * 5
-    assert "not proven complete" not in err
-    monkeypatch.setattr(completeness2, "BUDGET", 0)      # no solve left for the proof
-    assert main(["equilibria", str(path), "--json"]) == 0   # (the entries are still right)
-    out, err = capsys.readouterr()
-    assert [json.loads(x)["complete"] for x in out.splitlines()] == [False] * 5
-    assert "the list is not proven complete (the reduced gradient's bounds" in err
+    cli_says_whether_proven(path, capsys, monkeypatch, completeness2, 5,
+                            "the list is not proven complete (the reduced gradient's bounds")
 
 
 def test_an_inaccurate_copy_of_a_listed_saddle_is_dropped_from_a_proven_list():
