@@ -58,7 +58,7 @@ def curve_zeros(grad, axes, S, fine: int = 8) -> list:
     -------
     list of ndarray
         Amplitudes found, not yet classified nor merged
-        (:func:`.stationary2._at_roots` checks their residual).
+        (:func:`.plane_newton.at_roots` checks their residual).
 
     Notes
     -----

@@ -148,7 +148,7 @@ def check_contact(dp, prog, out, polish=None, S: float = 0.0) -> None:
                 log.info("equilibria: the equilibrium at s = %s polished on the whole beam",
                          e.amplitudes)
                 # (at the zero's amplitudes during the search, as in
-                # stationary2._at_roots; whole_beam.settle gives the beam's at the end)
+                # plane_newton.at_roots; whole_beam.settle gives the beam's at the end)
                 for f in dataclasses.fields(e):
                     if f.name != "amplitudes":
                         setattr(e, f.name, getattr(polished, f.name))
