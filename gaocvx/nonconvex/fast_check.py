@@ -47,7 +47,7 @@ from ..linalg import one_blas_thread
 from ..tolerances import STATIONARITY_TOL, TOUCH_TOL, complementarity
 
 __all__ = ["amplitude_range", "contact_polish", "certify", "certify_contact", "lp_ranges",
-           "padded", "RANGE_PAD", "POLISH_BUDGET"]
+           "lp_min", "padded", "RANGE_PAD", "POLISH_BUDGET"]
 
 log = logging.getLogger(__name__)
 
@@ -144,37 +144,43 @@ def lp_ranges(D, A_ub, b_ub, A_eq, b_eq):
         # with the rows of B as they are, ~2e-3)
         scale = max(float(np.max(np.abs(D[i]))), 1e-300)
         direction = D[i] / scale
-        for sign in (1.0, -1.0):
-            # (HiGHS's presolve failed, "Solve error", on a P1 beam's third mode with an
-            # obstacle below, where the LP is unbounded; without presolve it says so)
-            for method, options in LP_ATTEMPTS:
-                with _quiet_stdout():
-                    res = so.linprog(sign * direction, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq,
-                                     b_eq=b_eq, bounds=(None, None), method=method,
-                                     options=options)
-                if res.status in (0, 3):
-                    break
-            if res.status == 0:
-                # The end is taken from the dual, a bound by weak duality: with
-                # y <= 0 for the rows A_ub z <= b_ub and the equality multipliers,
-                # (sign d)'z = y'A_ub z + y_eq'A_eq z + r'z >= y'b_ub + y_eq'b_eq + r'z,
-                # r the dual residual, checked to be round-off (measured 2e-16 at
-                # 2048 elements; the primal and dual values agreed to 3e-16).
-                y = np.minimum(res.ineqlin.marginals, 0.0)
-                y_eq = res.eqlin.marginals
-                r = sign * direction - A_ub.T @ y - A_eq.T @ y_eq
-                if float(np.max(np.abs(r))) > 1e-10:
-                    log.warning("amplitude range: dual residual %.1e; no end taken",
-                                float(np.max(np.abs(r))))
-                    continue
-                bound = float(b_ub @ y + b_eq @ y_eq)   # <= min (sign d)'z
-                if sign > 0:
-                    lo[i] = scale * bound
-                else:
-                    hi[i] = -scale * bound
-            elif res.status != 3:   # 3: unbounded (no limit on that side)
-                log.warning("amplitude range: linprog status %d (%s)", res.status, res.message)
+        lo[i] = scale * lp_min(direction, A_ub, b_ub, A_eq, b_eq)[0]
+        hi[i] = -scale * lp_min(-direction, A_ub, b_ub, A_eq, b_eq)[0]
     return lo, hi
+
+
+def lp_min(direction, A_ub, b_ub, A_eq, b_eq) -> tuple:
+    """A lower bound of ``min direction'z`` over ``{A_ub z <= b_ub, A_eq z = b_eq}``, and a minimiser.
+
+    The bound is taken from the dual solution (weak duality, its residual
+    checked); ``-inf`` where the program is unbounded, HiGHS fails or the dual
+    residual is not round-off, and the minimiser then ``None`` (a weaker bound,
+    never a wrong one).
+    """
+    # (HiGHS's presolve failed, "Solve error", on a P1 beam's third mode with an
+    # obstacle below, where the LP is unbounded; without presolve it says so)
+    for method, options in LP_ATTEMPTS:
+        with _quiet_stdout():
+            res = so.linprog(direction, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b_eq,
+                             bounds=(None, None), method=method, options=options)
+        if res.status in (0, 3):
+            break
+    if res.status != 0:
+        if res.status != 3:   # 3: unbounded (no limit on that side)
+            log.warning("amplitude range: linprog status %d (%s)", res.status, res.message)
+        return -math.inf, None
+    # The end is taken from the dual, a bound by weak duality: with y <= 0 for the
+    # rows A_ub z <= b_ub and the equality multipliers,
+    # d'z = y'A_ub z + y_eq'A_eq z + r'z >= y'b_ub + y_eq'b_eq + r'z,
+    # r the dual residual, checked to be round-off (measured 2e-16 at 2048
+    # elements; the primal and dual values agreed to 3e-16).
+    y = np.minimum(res.ineqlin.marginals, 0.0)
+    y_eq = res.eqlin.marginals
+    r = direction - A_ub.T @ y - A_eq.T @ y_eq
+    if float(np.max(np.abs(r))) > 1e-10:
+        log.warning("amplitude range: dual residual %.1e; no end taken", float(np.max(np.abs(r))))
+        return -math.inf, None
+    return float(b_ub @ y + b_eq @ y_eq), np.asarray(res.x, float)
 
 
 def contact_polish(prog, u, lam):
