@@ -64,9 +64,16 @@ BUDGET = 12000
 GEOMETRY = 3
 # Samples on each ring around a known zero.
 RING_POINTS = 8
+# Failed solves (within the admissible amplitudes) after which the proof gives up:
+# a region where they fail is not covered, and splitting it would only spend the budget.
+MAX_FAILED = 20
+# With an obstacle, a sample beyond the admissible amplitudes' outer polygon is
+# moved onto its rim, and where the solve fails there, these fractions of the way
+# on to the inner polygon's middle.
+INSETS = (1e-12, 1e-10, 1e-8)
 
 
-def cover(grad, axes, known, c, tol, rho, budget, samples=()) -> tuple:
+def cover(grad, axes, known, c, tol, rho, budget, samples=(), region=None) -> tuple:
     """Whether the ellipses prove that ``∇F`` has no zero beyond ``rho`` of ``known``.
 
     Parameters
@@ -89,6 +96,11 @@ def cover(grad, axes, known, c, tol, rho, budget, samples=()) -> tuple:
         At most this many more evaluations of ``grad``.
     samples : sequence of 2-vectors
         More points already solved (their ellipses help; no solve is spent).
+    region : Polygon, optional
+        The admissible amplitudes (:mod:`.polygon`; with an obstacle): no zero
+        lies outside its outer polygon, so parts of cells there need no ellipse,
+        and samples are taken inside its inner one; a failed solve between the
+        two is no failure (a slice there may be empty).
 
     Returns
     -------
@@ -108,25 +120,44 @@ def cover(grad, axes, known, c, tol, rho, budget, samples=()) -> tuple:
     P, G, T = [], [], []
     seen = set()
     sampled, open_cells = [], []
-    failed = False
+    failures = 0
 
-    def add(p) -> bool:
+    def add(p, count=True) -> bool:
+        nonlocal failures
         key = (float(p[0]), float(p[1]))
         if key in seen:
             return True
         seen.add(key)
+        if region is not None and region.outside(np.array(key))[0]:
+            return True       # (no admissible amplitude: nothing to solve)
         g = np.asarray(grad(np.array(key)), float)
         if not np.all(np.isfinite(g)):
+            # (no ellipse; between the inner and outer polygons a slice may be empty)
+            failures += count and (region is None or region.within(np.array(key)))
             return False
         P.append(key)
         G.append(g)
         T.append(float(bound(np.array(key), g)))
         return True
 
+    def sample(p):
+        # p's solve; on the rim, where round-off may put p just outside, tried
+        # again inwards (only the last failure counts)
+        sampled.append(np.array(p, float))
+        if add(p, count=region is None) or region is None:
+            return
+        for f in INSETS:
+            q = np.asarray(p, float) + f * (region.vertices.mean(axis=0) - np.asarray(p, float))
+            sampled.append(q)
+            if add(q, count=f == INSETS[-1]):
+                return
+
     ax0, ax1 = (np.asarray(a, float) for a in axes)
-    ok = all([add((a, b)) for a in ax0 for b in ax1] + [add(p) for p in samples])
-    if not ok:
-        failed = True
+    for p in [(a, b) for a in ax0 for b in ax1] + list(samples):
+        add(p)
+    # (only the cover's own failures count: the searches' slices failed where
+    # they failed, and no ellipse comes from them)
+    failures = 0
     # rings around each known zero, radii doubling from rho / 2 to the grid's step,
     # RING_POINTS on each: at a distance r from a zero the ellipses that hold a
     # point come from samples between it and the zero (0.3 r to r from it), which
@@ -138,21 +169,26 @@ def cover(grad, axes, known, c, tol, rho, budget, samples=()) -> tuple:
         while r < step and len(sampled) < budget:
             for a in np.arange(RING_POINTS) * (2.0 * np.pi / RING_POINTS):
                 p = (z[0] + r * math.cos(a), z[1] + r * math.sin(a))
+                if region is not None:
+                    # (onto the rim: next to a zero on it, the rim's points are held
+                    # only by samples on it)
+                    p = tuple(region.onto(p))
                 if ax0[0] <= p[0] <= ax0[-1] and ax1[0] <= p[1] <= ax1[-1] and \
                         (float(p[0]), float(p[1])) not in seen:
-                    sampled.append(np.array(p))
-                    failed |= not add(p)
+                    sample(p)
             r *= 2.0
     cells = [(ax0[i], ax0[i + 1], ax1[j], ax1[j + 1])
              for i in range(len(ax0) - 1) for j in range(len(ax1) - 1)]
     # in rounds, all cells of a size together: a cell is split only after its
     # neighbours' samples of that size are in (one at a time, depth first, a cell
     # was split down to 1e-7 of its size that its neighbours' samples held)
-    while cells:
-        arrays = _usable(np.array(P), np.array(G), np.array(T), c)
-        cells = [q for q in cells if not _near(q, known, rho) and not _held(q, arrays, c)]
+    while cells and failures <= MAX_FAILED:
+        arrays = _usable(np.array(P).reshape(-1, 2), np.array(G).reshape(-1, 2), np.array(T), c)
+        cells = [q for q in cells if not _near(q, known, rho) and
+                 not _held(q, arrays, c, region)]
         children = []
-        for x0, x1, y0, y1 in cells:
+        for cell in cells:
+            x0, x1, y0, y1 = cell
             mx, my = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
             if max(x1 - x0, y1 - y0) < 0.1 * rho or not (x0 < mx < x1 and y0 < my < y1):
                 # (a cell on the disc's rim: the ellipses that hold points there come
@@ -165,18 +201,26 @@ def cover(grad, axes, known, c, tol, rho, budget, samples=()) -> tuple:
                 open_cells.append(np.array([mx, my]))
                 continue
             new = [(mx, my), (mx, y0), (mx, y1), (x0, my), (x1, my)]
+            if region is not None:
+                # (a point beyond the outer polygon moved onto its rim, whose points
+                # are held by samples on it beside them -- moved inwards, 1e-9 of the
+                # way to the middle, a sample held none next to a zero on the rim,
+                # 1e-4 of the square from it; and where the rim crosses the
+                # quarters' edges, each such point held by itself: the rim's points
+                # on the side of a zero beyond them are held by none of the
+                # middles' projections)
+                rim = [v for q in _quarters(cell) for v in _rim_points(region, q)]
+                new = [tuple(region.onto(p)) for p in new + rim]
             fresh = [p for p in new if (float(p[0]), float(p[1])) not in seen]
-            sampled += [np.array(p) for p in fresh]
-            if not all([add(p) for p in fresh]):
-                failed = True     # (a failed solve inside: nothing is known there)
-                continue
-            children += [(x0, mx, y0, my), (mx, x1, y0, my), (x0, mx, my, y1), (mx, x1, my, y1)]
+            for p in fresh:
+                sample(p)     # (a failed solve: no ellipse there, the cell split all the same)
+            children += _quarters(cell)
         cells = children
-    return not failed and not open_cells, sampled, open_cells
+    return failures <= MAX_FAILED and not cells and not open_cells, sampled, open_cells
 
 
 def proven_zeros(grad, axes, zeros, search, c, tol, rho, budget=None, rounds=3,
-                 samples=()) -> tuple:
+                 samples=(), region=None) -> tuple:
     """The zeros of ``∇F`` with the ellipses' proof that none is missing.
 
     :func:`cover` with ``zeros`` known; where a cell shrinks below ``rho / 10`` far
@@ -199,6 +243,8 @@ def proven_zeros(grad, axes, zeros, search, c, tol, rho, budget=None, rounds=3,
         Bounds tried at most.
     samples : sequence of 2-vectors
         Points already solved (the searches' grids).
+    region : Polygon, optional
+        As :func:`cover`.
 
     Returns
     -------
@@ -212,7 +258,8 @@ def proven_zeros(grad, axes, zeros, search, c, tol, rho, budget=None, rounds=3,
     samples = [np.asarray(p, float) for p in samples]
     complete = False
     for _ in range(rounds):
-        complete, sampled, open_cells = cover(grad, axes, zeros, c, tol, rho, budget, samples)
+        complete, sampled, open_cells = cover(grad, axes, zeros, c, tol, rho, budget, samples,
+                                               region)
         budget -= len(sampled)
         samples += sampled
         if complete or not open_cells or budget <= 0:
@@ -227,7 +274,7 @@ def proven_zeros(grad, axes, zeros, search, c, tol, rho, budget=None, rounds=3,
     return zeros, complete
 
 
-def prove(grad, search, zeros, axes, samples, c, dtol, S, rho) -> bool:
+def prove(grad, search, zeros, axes, samples, c, dtol, S, rho, region=None) -> bool:
     """Whether the ellipses prove a two-mode list complete (:func:`proven_zeros`).
 
     Parameters
@@ -252,6 +299,8 @@ def prove(grad, search, zeros, axes, samples, c, dtol, S, rho) -> bool:
         ``2 max(c) S``, or ``|∇F|``), as with one mode.
     S, rho : float
         The amplitude bound and the distance within which zeros are one.
+    region : Polygon, optional
+        With an obstacle, the admissible amplitudes (:mod:`.polygon`).
     """
     c = np.asarray(c, float)
 
@@ -263,7 +312,7 @@ def prove(grad, search, zeros, axes, samples, c, dtol, S, rho) -> bool:
         return dtol * (2.0 * float(np.max(c)) * S + float(np.linalg.norm(d)))
 
     _, complete = proven_zeros(trusted, axes, zeros, search, c, tol, rho,
-                               samples=[np.asarray(p, float) for p in samples])
+                               samples=[np.asarray(p, float) for p in samples], region=region)
     return complete
 
 
@@ -286,11 +335,15 @@ def _usable(P, G, T, c):
     return P, G, T, lo, hi
 
 
-def _held(cell, arrays, c) -> bool:
+def _held(cell, arrays, c, region=None) -> bool:
     """Whether every sub-rectangle of ``cell`` (2^j a side, j <= GEOMETRY) is held
-    by one sample's ellipse (its corners inside, but the sample itself)."""
+    by one sample's ellipse (its corners inside, but the sample itself); with a
+    ``region``, or lies outside its outer polygon, or its part inside that
+    polygon is held (that part's vertices inside one ellipse)."""
     P, G, T, lo, hi = arrays
     x0, x1, y0, y1 = cell
+    if region is not None and _beyond(region, np.array([[x0, y0], [x0, y1], [x1, y0], [x1, y1]])):
+        return True
     # the samples whose ellipse's box meets the cell
     near = (lo[:, 0] < x1) & (hi[:, 0] > x0) & (lo[:, 1] < y1) & (hi[:, 1] > y0)
     if not np.any(near):
@@ -303,18 +356,52 @@ def _held(cell, arrays, c) -> bool:
             todo = np.repeat(np.repeat(todo, 2, axis=0), 2, axis=1)
         xs, ys = np.linspace(x0, x1, m + 1), np.linspace(y0, y1, m + 1)
         X, Y = np.meshgrid(xs, ys, indexing="ij")
-        D = np.stack([X.ravel(), Y.ravel()], axis=1)[:, None, :] - P[None, :, :]
-        dist = np.linalg.norm(D, axis=2)
-        inside = 2.0 * (c[0] * D[..., 0] ** 2 + c[1] * D[..., 1] ** 2) + T * dist \
-            < np.einsum("ijk,jk->ij", D, G)
-        inside |= dist == 0.0      # the sample itself: no zero (|g| > t)
-        inside = inside.reshape(m + 1, m + 1, -1)
+        corners = np.stack([X.ravel(), Y.ravel()], axis=1)
+        inside = _inside(corners, P, G, T, c).reshape(m + 1, m + 1, -1)
         held = np.any(inside[:-1, :-1] & inside[1:, :-1] & inside[:-1, 1:] & inside[1:, 1:],
                       axis=2)
+        if region is not None:
+            cut = region.cut(corners).reshape(m + 1, m + 1, -1)
+            held |= np.any(cut[:-1, :-1] & cut[1:, :-1] & cut[:-1, 1:] & cut[1:, 1:], axis=2)
+            # across the outer polygon's rim: its part inside, clipped (by the
+            # half-planes that cut a corner: the others hold the whole rectangle)
+            some = cut[:-1, :-1] | cut[1:, :-1] | cut[:-1, 1:] | cut[1:, 1:]
+            for a, b in zip(*np.nonzero(todo & ~held & np.any(some, axis=2))):
+                part = region.clip(xs[a], xs[a + 1], ys[b], ys[b + 1], np.nonzero(some[a, b])[0])
+                held[a, b] = not len(part) or bool(np.any(np.all(_inside(part, P, G, T, c),
+                                                                   axis=0)))
         todo &= ~held
         if not todo.any():
             return True
     return False
+
+
+def _quarters(cell) -> list:
+    x0, x1, y0, y1 = cell
+    mx, my = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
+    return [(x0, mx, y0, my), (mx, x1, y0, my), (x0, mx, my, y1), (mx, x1, my, y1)]
+
+
+def _rim_points(region, cell) -> list:
+    """The points where the outer polygon's rim crosses the cell's edges."""
+    x0, x1, y0, y1 = cell
+    part = region.clip(x0, x1, y0, y1)
+    return [tuple(v) for v in part if not (v[0] in (x0, x1) and v[1] in (y0, y1))]
+
+
+def _inside(points, P, G, T, c) -> np.ndarray:
+    """``(points, samples)``: whether each point lies in each sample's ellipse
+    (or is the sample itself: no zero, ``|g| > t``)."""
+    D = points[:, None, :] - P[None, :, :]
+    dist = np.linalg.norm(D, axis=2)
+    inside = 2.0 * (c[0] * D[..., 0] ** 2 + c[1] * D[..., 1] ** 2) + T * dist \
+        < np.einsum("ijk,jk->ij", D, G)
+    return inside | (dist == 0.0)
+
+
+def _beyond(region, corners) -> bool:
+    # all corners outside one of the outer polygon's half-planes
+    return bool(np.any(np.all(region.cut(corners), axis=0)))
 
 
 def _near(cell, known, rho) -> bool:

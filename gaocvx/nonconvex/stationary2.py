@@ -103,6 +103,7 @@ from .edges import edge_minima
 from .obstacle_checks import at_global, check_contact, exact_flat
 from .plane_newton import at_roots as _at_roots, axis as _axis, \
     grid_seeds as _grid_seeds, newton as _newton
+from .polygon import program_polygon
 from .probes import least_rise as _least_rise
 from .stationary1 import RHO
 from .whole_beam import polisher, settle as settle_beams
@@ -140,6 +141,7 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
     """
     t0 = time.perf_counter()
     cache = {}
+    obstacle = dp.contact == "obstacle"
 
     def grad(s):
         key = (float(s[0]), float(s[1]))
@@ -272,17 +274,21 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
             # (Newton's end is dropped where F is infinite there: no end, no image)
             out = mirror.complete_pairs(dp, modes, grad, out, S, lambda s: next(
                 (settle(end) for end in _newton(grad, hessian, [s], S)), None))
-    if proof is not None and dp.contact != "obstacle" and modes is not None:
+    # (with an obstacle, over the admissible amplitudes: a polygon, :mod:`.polygon`)
+    region = program_polygon(prog, lo, hi) if proof is not None and obstacle else None
+    if proof is not None and modes is not None and (region is not None or not obstacle):
         found = []
 
         def search(seeds):   # (Newton's method from the proof's open cells)
             new = at_roots(_newton(grad, hessian, seeds, S), S,
                            [e.amplitudes for e in out + found])
+            if obstacle:
+                check_contact(dp, prog, new, polish, S)
             found.extend(new)
             return [e.amplitudes for e in new]
 
         proof["complete"] = prove(grad, search, [e.amplitudes for e in out], grids[0],
-                                  list(cache), modes.c, proof["dtol"], S, RHO * S)
+                                  list(cache), modes.c, proof["dtol"], S, RHO * S, region)
         out += found
     if zoom:
         # (near the flat beam the slices' beams are the scene's accuracy: each
@@ -295,7 +301,7 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
         # own (a P2 beam on a bonded bed at 1.001 lambda_2 listed a saddle twice, the
         # copy 5.4e-6 S off with a residual of 1.5e-6 -- a helper's campaign)
         if prove(grad, lambda seeds: [], [e.amplitudes for e in sure], grids[0], list(cache),
-                 modes.c, proof["dtol"], S, RHO * S):
+                 modes.c, proof["dtol"], S, RHO * S, region):
             out = sure
     out.sort(key=lambda e: e.energy)
     log.info("equilibria (k = 2): %d found from %d seeds, %d solves in %.2f s", len(out),
