@@ -138,8 +138,17 @@ def _stationarity(mf: MixedForm, z, lam, H, scale=None) -> float:
         d = _contact_step(mf, z, lam, H, rhs_z, rhs_c)
         if d is None:
             return math.inf
-    nodal = float(np.max(np.abs(d[mf.w_index]), initial=0.0)) / size
+    nodal = _relative(float(np.max(np.abs(d[mf.w_index]), initial=0.0)), size)
     return max(decrement / scale, nodal, _axial_sensitivity(mf, z, factor, size))
+
+
+def _relative(step: float, size: float) -> float:
+    """``step / size``; where the size is 0 (no free deflection and no load to give
+    a floor: one clamped element), 0 for no step and infinite for any other (a
+    ZeroDivisionError traceback before)."""
+    if size > 0:
+        return step / size
+    return 0.0 if step == 0 else math.inf
 
 
 def _contact_step(mf: MixedForm, z, lam, H, rhs_z, rhs_c) -> np.ndarray:
@@ -200,7 +209,7 @@ def _axial_sensitivity(mf: MixedForm, z, factor, size) -> float:
         return 0.0
     rhs = DATA_ROUNDOFF * abs(mf.dp.p) * (mf.axial @ mf.absolute(z))
     dz, _ = factor.solve(rhs, np.zeros(mf.C.shape[0]))
-    return float(np.max(np.abs(dz[mf.w_index]), initial=0.0)) / size
+    return _relative(float(np.max(np.abs(dz[mf.w_index]), initial=0.0)), size)
 
 
 def _decrement(d, H, scale) -> float:

@@ -378,3 +378,26 @@ def test_convex_returns_the_rung_nearest_to_passing(monkeypatch):
     r = solve(scene, "convex")
     assert r.status == "inaccurate" and len(seen) == 2 and seen[1] > seen[0] > 1.0
     assert shortfall(r.residual) == pytest.approx(seen[0])
+
+
+@pytest.mark.parametrize("supports", ["P2", "P4"])
+@pytest.mark.parametrize("method", ["auto", "convex", "newton"])
+def test_one_element_on_a_bonded_bed_without_load_is_certified(supports, method):
+    # No free nodal deflection and no load to give a size floor: the nodal step
+    # was measured relative to 0 (a ZeroDivisionError traceback, a helper's trial).
+    # The reference: the independent discrete energy of tests/nonconvex_independent.py
+    # (bonded beds too), minimised by SciPy from the reported answer and from 0.
+    from nonconvex_independent import Discrete
+    data = {"beam": {"model": "gao", "supports": supports, "length": 1.0, "E": 2.1e11,
+                     "nu": 0.3, "half_thickness": 0.1, "width": 1.0},
+            "load": {"axial": 0.0}, "mesh": {"elements": 1},
+            "foundation": {"gap": 0.01, "stiffness": 1.4e9, "kind": "bilateral"}}
+    scene = Scene.from_dict(data)
+    result = solve(scene, method)
+    assert result.status == "optimal"
+    en = Discrete(scene, 0.01)
+    x = en.from_nodal(result.w, result.slope)
+    assert en.energy(x) == pytest.approx(result.energy, rel=1e-9)
+    assert np.max(np.abs(en(x)[1])) <= 1e-8 * en.parts_scale(x)      # stationary
+    for start in (x, np.zeros(en.n)):   # (convex at P = 0: the minimum)
+        assert en.local_min(start)[1] * en.E0 == pytest.approx(result.energy, rel=1e-9)
