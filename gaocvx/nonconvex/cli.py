@@ -96,7 +96,8 @@ def _cmd_equilibria(args) -> int:
         from .pictures import save_equilibria_plot
         save_equilibria_plot(eqs, args.plot, scene)
     if eqs and eqs[0].complete is not True:
-        why = ("two unstable modes with an obstacle: the plane of amplitudes is sampled"
+        why = ("two unstable modes with an obstacle: the admissible amplitudes could not "
+               "be bounded, the plane of amplitudes is sampled"
                if eqs[0].complete is None
                else "the reduced gradient's bounds did not cover every amplitude")
         print(f"note: {args.scene}: the list is not proven complete ({why})", file=sys.stderr)

@@ -162,10 +162,11 @@ class Equilibrium:
         Of the list it belongs to: True where it is proven to miss no
         equilibrium (one unstable mode: every zero of the reduced gradient
         within ``stationary1.RHO`` times the amplitude bound S of a listed one's
-        amplitude, by :mod:`.completeness`; two without an obstacle: within
-        twice that, by :mod:`.completeness2`; below the limit the one
-        equilibrium), False where that proof failed, None where none is
-        attempted (two unstable modes with an obstacle or channel: a sampling).
+        amplitude, by :mod:`.completeness`; two: within twice that, by
+        :mod:`.completeness2`, with an obstacle or channel over the admissible
+        amplitudes' polygon; below the limit the one equilibrium), False where
+        that proof failed, None where none is attempted (two unstable modes with
+        an obstacle or channel whose polygon could not be bounded: a sampling).
     """
 
     energy: float

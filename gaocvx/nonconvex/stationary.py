@@ -114,9 +114,10 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
     -------
     list of Equilibrium
         Each with ``complete``, the list's: True when proven to miss no
-        equilibrium (one mode, :mod:`.completeness`; two without an obstacle,
-        :mod:`.completeness2`; below the limit the one minimiser), False where
-        that proof failed, None with two modes and an obstacle or channel.
+        equilibrium (one mode, :mod:`.completeness`; two, :mod:`.completeness2`;
+        below the limit the one minimiser), False where that proof failed, None
+        with two modes and an obstacle or channel whose admissible amplitudes
+        could not be bounded (:mod:`.polygon`).
 
     Raises
     ------
@@ -207,8 +208,8 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
     if modes.k == 2:
         from .stationary2 import find_plane
         glob = global_minimisers(dp, modes) if obstacle else []
-        # (the ellipses' proof without an obstacle, :mod:`.completeness2`; with one,
-        # a sampling: complete None)
+        # (the ellipses' proof, :mod:`.completeness2`; None where it is not tried:
+        # an obstacle's admissible amplitudes not bounded, :mod:`.polygon`)
         proof = {"dtol": dtol, "complete": None}
         out = find_plane(dp, prog, S, floor=scene_energy(dp, modes), modes=modes,
                          starts=[np.asarray(e.amplitudes, float) for e in glob], box=(lo, hi),

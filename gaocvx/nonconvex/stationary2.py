@@ -2,9 +2,9 @@
 
 The equilibria are the stationary points of ``F(s1, s2)`` (nonconvex.md; see
 :mod:`.stationary` for k = 1).  In two dimensions no bracketing finds every
-zero, so this search is a careful sampling; without an obstacle the monotone
-gradient's ellipses (:mod:`.completeness2`, step 7) then prove that none is
-missing, or say that they could not:
+zero, so this search is a careful sampling; the monotone gradient's ellipses
+(:mod:`.completeness2`, step 7) then prove that none is missing, or say that
+they could not:
 
 1. ``∇F`` on a ``GRID2 x GRID2`` grid of the square ``[-S, S]^2``
    (:func:`.bounds.equilibrium_box`: every equilibrium has ``|s| <= S``; with
@@ -68,9 +68,10 @@ missing, or say that they could not:
    And where the flat beam is listed stable and ``optimal``, :func:`.stationary.equilibria`
    searches its neighbourhood again in a problem of its own scale
    (:func:`.zooms.own_scale`);
-7. without an obstacle (``proof``), the ellipses of :mod:`.completeness2` cover
-   the square, Newton's method starting from every cell they leave open, and
-   the list is proven complete or not; in a proven list, ``inaccurate``
+7. (``proof``) the ellipses of :mod:`.completeness2` cover the square (with an
+   obstacle or channel, its part in the admissible amplitudes' polygon,
+   :mod:`.polygon`), Newton's method starting from every cell they leave open,
+   and the list is proven complete or not; in a proven list, ``inaccurate``
    entries are dropped when the ``optimal`` ones alone are proven complete.
 
 Examples
@@ -134,10 +135,12 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
     zero curves of one component of ``∇F`` are added on every grid
     (:func:`.contours.curve_zeros`).  ``zoom``: the second searches of
     :mod:`.zooms`; ``flat``: ``s = 0`` among the seeds and tried as an edge
-    minimum (False in a cluster's box).  ``proof``: without an obstacle, a dict
+    minimum (False in a cluster's box).  ``proof``: a dict
     whose ``"dtol"`` (the gradient's accuracy, relative to its local size) asks
     for the ellipses' proof that no zero is missing (:mod:`.completeness2`, with
-    ``modes``), its verdict returned in ``proof["complete"]``.
+    ``modes``; with an obstacle over :func:`.polygon.program_polygon`'s polygon),
+    its verdict returned in ``proof["complete"]`` (left as it is where the
+    polygon could not be bounded).
     """
     t0 = time.perf_counter()
     cache = {}
