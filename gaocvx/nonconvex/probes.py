@@ -5,6 +5,11 @@ least eigenvalue of F's Hessian (central differences) and the least one-sided
 rise of F around ``s`` (:func:`least_rise`), and, where the two disagree (a kink
 of F through ``s``, or a saddle closer than the probes), F's own values at two
 shorter steps.  ``grad(s)`` is the search's cached ``(F, ∇F, u, ok)``.
+
+:func:`hessian_stability` decides the stability of an equilibrium without an
+obstacle from the energy's own Hessian on the whole beam, where that energy is
+twice differentiable around it: at its own scale, where the probes' 1e-6 S may
+be far larger than the beam.
 """
 
 from __future__ import annotations
@@ -13,7 +18,7 @@ import math
 
 import numpy as np
 
-__all__ = ["curvature", "least_rise"]
+__all__ = ["curvature", "least_rise", "hessian_stability"]
 
 
 def curvature(grad, H, s, h) -> float:
@@ -112,3 +117,38 @@ def least_rise(grad, s, h, n: int = 16, fine: int = 64, kink: bool = False) -> f
                                      options=dict(xatol=1e-3 * step, maxiter=40))
             least = min(least, float(res.fun), float(vals[i]))
     return min(least, float(np.min(vals)))
+
+
+def hessian_stability(dp, u, margin: float = 1e-3):
+    """A strict local minimum (True), not a minimum (False), or undecided (None),
+    from the least eigenvalue ``mu`` of the energy's Hessian at the whole beam's
+    Hermite DOFs ``u`` relative to K (Jacobi-scaled, as
+    :func:`.whole_beam.second_order`; ``|mu|`` within :func:`.whole_beam.eig_tol`:
+    undecided).
+
+    Only where the energy is twice differentiable in a neighbourhood of ``u``: no
+    obstacle, and a unilateral foundation's points all farther from its edge
+    (``g - w = 0``) than ``margin`` of the largest ``|g - w|`` and ``|w|`` there
+    (else None); and up to :data:`.whole_beam.MAX_UNKNOWNS` DOFs (dense).  Why:
+    the reduced function's probes classify at 1e-6 S, and a beam pressed
+    1.5e-9 m into a stiff bed at gap 0 (S = 0.2; P4, two modes, 2 elements) lifts
+    off within that step: listed unstable, a strict local minimum (the
+    Hessian's eigenvalues 0.47-5.4 relative to K; a helper's campaign).
+    """
+    from .whole_beam import MAX_UNKNOWNS, _least, eig_tol
+
+    if dp.contact == "obstacle" or not 0 < dp.n <= MAX_UNKNOWNS:
+        return None
+    u = np.asarray(u, float)
+    if dp.contact == "foundation" and not dp.bilateral:
+        w = dp.Nq @ u
+        depth = dp.g - w
+        size = max(float(np.max(np.abs(depth))), float(np.max(np.abs(w))))
+        if not float(np.min(np.abs(depth))) > margin * size:
+            return None
+    H, K = dp.hessian(u), dp.K
+    H = H.toarray() if hasattr(H, "toarray") else np.asarray(H)
+    K = K.toarray() if hasattr(K, "toarray") else np.asarray(K)
+    mu = _least(H, K, None, [])
+    tol = eig_tol(len(dp.x) - 1)
+    return True if mu > tol else False if mu < -tol else None

@@ -55,6 +55,7 @@ from .bounds import check_bounded, equilibrium_box, estimate_boxes, zoom_boxes
 from . import stationary1 as line
 from .equilibrium import Equilibrium, check_has_minimum, check_mountain_pass
 from .images import complete_beams
+from .probes import hessian_stability
 from .obstacle_checks import check_contact, exact_flat, global_minimisers
 from .whole_beam import polisher, settle
 from .zooms import own_scale
@@ -265,9 +266,18 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         out = sorted(complete_beams(dp, polish, out), key=lambda e: e.energy)
     if out and all(e is not None for e in out):
         for e in out:
-            parts = dp.energy_parts(dp.from_physical(e.w, e.slope))
+            u = dp.from_physical(e.w, e.slope)
+            parts = dp.energy_parts(u)
             e.energy_scale = float(sum(abs(v) for v in parts.values()) * dp.E0)
             e.complete = complete
+            # (the stability at the beam's own scale, where the energy is smooth
+            # there: the probes of F step 1e-6 S, :func:`.probes.hessian_stability`)
+            verdict = hessian_stability(dp, u) if e.status == "optimal" else None
+            if verdict is not None and verdict != bool(e.stable):
+                log.info("equilibria: an entry at %.4g J is %s by the energy's Hessian, not "
+                         "by the reduced function's probes", e.energy,
+                         "stable" if verdict else "unstable")
+                e.stable = verdict
         check_has_minimum(out)
         check_mountain_pass(out)
         return out
