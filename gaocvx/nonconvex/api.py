@@ -114,9 +114,9 @@ def solve_global_result(scene, elements=None, problem=None, solver=None):
     check_bounded(dp)
     n_el = dp.n_nodes - 1
     if n_el > MAX_FAST_ELEMENTS:
-        raise SceneError("mesh.elements", f"{_statement(dp)}; above it the global method's "
-                         f"dense node programs take at most {MAX_ELEMENTS} elements, its fast "
-                         f"path {MAX_FAST_ELEMENTS}", n_el)
+        raise SceneError("mesh.elements", f"{_statement(dp)}; above it the global method "
+                         f"takes at most {MAX_FAST_ELEMENTS} elements (its fast path; the dense "
+                         f"node programs at most {MAX_ELEMENTS})", n_el)
     modes = unstable_modes(dp)
     if modes.k > MAX_MODES:
         # (the count stops past MAX_UNSTABLE: then it is a lower bound)
