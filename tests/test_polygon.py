@@ -78,9 +78,12 @@ def test_clipping_and_projecting():
     assert not len(poly.clip(2.0, 3.0, 2.0, 3.0))
     assert np.allclose(poly.onto(np.array([2.0, 2.0])), [0.75, 0.75])
     assert np.allclose(poly.onto(np.array([2.0, 0.5])), [1.0, 0.5])
-    p = poly.onto(np.array([2.0, 2.0]), 1e-9)
+    p = poly.inwards(poly.onto(np.array([2.0, 2.0])), 1e-9)
     assert poly.within(p) and np.linalg.norm(p - [0.75, 0.75]) < 1e-9
-    assert np.allclose(poly.onto(np.array([0.3, 0.4]), 1e-9), [0.3, 0.4])
+    assert np.allclose(poly.onto(np.array([0.3, 0.4])), [0.3, 0.4])
+    assert poly.rim_points(0.5, 2.0, 0.5, 2.0) == [(1.0, 0.5), (0.5, 1.0)] or \
+        sorted(poly.rim_points(0.5, 2.0, 0.5, 2.0)) == [(0.5, 1.0), (1.0, 0.5)]
+    assert poly.beyond([[2.0, 2.0], [3.0, 2.0]]) and not poly.beyond([[2.0, 2.0], [0.5, 0.5]])
 
 
 CHANNEL = {"beam": {"model": "gao", "supports": "P1", "length": 1.0, "E": 2.1e11, "nu": 0.3,

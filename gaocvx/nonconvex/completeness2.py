@@ -28,6 +28,15 @@ given the fixed-amplitude solves' accuracy.  A cell that shrinks below
 defeats the ellipses there): :func:`proven_zeros` hands its middle to the
 caller's search and tries again.
 
+With an obstacle or channel the amplitudes are those of a convex polygon ``A``
+(:mod:`.polygon`), ``Phi + I_A`` is convex, and at an equilibrium ``x`` (a zero
+of ``∇F`` in ``A``, or a point of its rim where the obstacle holds the beam)
+``2Cx`` is one of its subgradients: the same ellipses hold, for samples in
+``A``.  Cells outside the outer polygon hold no equilibrium; a cell across its
+rim is held when its part inside is; the rim's points are held by samples on
+the rim (next to an equilibrium there the gradient points inward, and samples
+inside reach no point between them and the rim).
+
 Examples
 --------
 ``F(s) = (s_1^2 + s_2^2)^2 / 4 - s_1^2 - s_2^2 / 2 + s_1 / 10`` (``c = (1, 1/2)``:
@@ -97,10 +106,11 @@ def cover(grad, axes, known, c, tol, rho, budget, samples=(), region=None) -> tu
     samples : sequence of 2-vectors
         More points already solved (their ellipses help; no solve is spent).
     region : Polygon, optional
-        The admissible amplitudes (:mod:`.polygon`; with an obstacle): no zero
-        lies outside its outer polygon, so parts of cells there need no ellipse,
-        and samples are taken inside its inner one; a failed solve between the
-        two is no failure (a slice there may be empty).
+        The admissible amplitudes (:mod:`.polygon`; with an obstacle): no
+        equilibrium lies outside its outer polygon, so parts of cells there need
+        no ellipse, and samples beyond it are taken on its rim (and where the rim
+        crosses the cells' quarters); a failed solve outside the inner polygon is
+        no failure (a slice there may be empty).
 
     Returns
     -------
@@ -147,7 +157,7 @@ def cover(grad, axes, known, c, tol, rho, budget, samples=(), region=None) -> tu
         if add(p, count=region is None) or region is None:
             return
         for f in INSETS:
-            q = np.asarray(p, float) + f * (region.vertices.mean(axis=0) - np.asarray(p, float))
+            q = region.inwards(p, f)
             sampled.append(q)
             if add(q, count=f == INSETS[-1]):
                 return
@@ -202,14 +212,11 @@ def cover(grad, axes, known, c, tol, rho, budget, samples=(), region=None) -> tu
                 continue
             new = [(mx, my), (mx, y0), (mx, y1), (x0, my), (x1, my)]
             if region is not None:
-                # (a point beyond the outer polygon moved onto its rim, whose points
-                # are held by samples on it beside them -- moved inwards, 1e-9 of the
-                # way to the middle, a sample held none next to a zero on the rim,
-                # 1e-4 of the square from it; and where the rim crosses the
-                # quarters' edges, each such point held by itself: the rim's points
-                # on the side of a zero beyond them are held by none of the
-                # middles' projections)
-                rim = [v for q in _quarters(cell) for v in _rim_points(region, q)]
+                # (beyond the outer polygon, onto its rim -- 1e-9 of the way inwards,
+                # samples held none of the rim's points within 1e-4 of the square of
+                # a zero on it; and where the rim crosses the quarters' edges, held
+                # by themselves: the middles' projections held none near a zero)
+                rim = [v for q in _quarters(cell) for v in region.rim_points(*q)]
                 new = [tuple(region.onto(p)) for p in new + rim]
             fresh = [p for p in new if (float(p[0]), float(p[1])) not in seen]
             for p in fresh:
@@ -342,7 +349,7 @@ def _held(cell, arrays, c, region=None) -> bool:
     polygon is held (that part's vertices inside one ellipse)."""
     P, G, T, lo, hi = arrays
     x0, x1, y0, y1 = cell
-    if region is not None and _beyond(region, np.array([[x0, y0], [x0, y1], [x1, y0], [x1, y1]])):
+    if region is not None and region.beyond([[x0, y0], [x0, y1], [x1, y0], [x1, y1]]):
         return True
     # the samples whose ellipse's box meets the cell
     near = (lo[:, 0] < x1) & (hi[:, 0] > x0) & (lo[:, 1] < y1) & (hi[:, 1] > y0)
@@ -382,13 +389,6 @@ def _quarters(cell) -> list:
     return [(x0, mx, y0, my), (mx, x1, y0, my), (x0, mx, my, y1), (mx, x1, my, y1)]
 
 
-def _rim_points(region, cell) -> list:
-    """The points where the outer polygon's rim crosses the cell's edges."""
-    x0, x1, y0, y1 = cell
-    part = region.clip(x0, x1, y0, y1)
-    return [tuple(v) for v in part if not (v[0] in (x0, x1) and v[1] in (y0, y1))]
-
-
 def _inside(points, P, G, T, c) -> np.ndarray:
     """``(points, samples)``: whether each point lies in each sample's ellipse
     (or is the sample itself: no zero, ``|g| > t``)."""
@@ -397,11 +397,6 @@ def _inside(points, P, G, T, c) -> np.ndarray:
     inside = 2.0 * (c[0] * D[..., 0] ** 2 + c[1] * D[..., 1] ** 2) + T * dist \
         < np.einsum("ijk,jk->ij", D, G)
     return inside | (dist == 0.0)
-
-
-def _beyond(region, corners) -> bool:
-    # all corners outside one of the outer polygon's half-planes
-    return bool(np.any(np.all(region.cut(corners), axis=0)))
 
 
 def _near(cell, known, rho) -> bool:

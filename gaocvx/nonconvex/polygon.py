@@ -96,15 +96,27 @@ class Polygon:
             poly = _clip_half_plane(poly, self.normals[i], self.offsets[i])
         return poly
 
-    def onto(self, p, inset: float = 0.0) -> np.ndarray:
-        """``p`` if it lies in the outer polygon, else the nearest point of its rim,
-        moved ``inset`` (a fraction) of the way on to the inner vertices' mean."""
+    def onto(self, p) -> np.ndarray:
+        """``p`` if it lies in the outer polygon, else the nearest point of its rim."""
         p = np.asarray(p, float)
         if not self.outside(p)[0]:
             return p
         V = self.outer_vertices()
-        q = _nearest_on_rim(V, p) if len(V) else p
-        return q + inset * (self.vertices.mean(axis=0) - q)
+        return _nearest_on_rim(V, p) if len(V) else p
+
+    def inwards(self, p, f: float) -> np.ndarray:
+        """``p`` moved the fraction ``f`` of the way to the inner vertices' mean."""
+        p = np.asarray(p, float)
+        return p + f * (self.vertices.mean(axis=0) - p)
+
+    def beyond(self, corners) -> bool:
+        """Whether all ``corners`` lie outside one outer half-plane (so does their hull)."""
+        return bool(np.any(np.all(self.cut(corners), axis=0)))
+
+    def rim_points(self, x0, x1, y0, y1) -> list:
+        """The points where the outer polygon's rim crosses the rectangle's edges."""
+        part = self.clip(x0, x1, y0, y1)
+        return [tuple(v) for v in part if not (v[0] in (x0, x1) and v[1] in (y0, y1))]
 
     def outer_vertices(self) -> np.ndarray:
         """The outer polygon's vertices (counter-clockwise; a box around the inner
