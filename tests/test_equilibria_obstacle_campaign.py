@@ -322,6 +322,7 @@ def test_default_equilibria_with_an_obstacle_are_independently_right(draw):
     assert not rec["violations"], rec["violations"]
 
 
+@pytest.mark.slow
 def test_two_modes_in_a_channel_at_gap_zero_has_its_equilibrium():
     """k = 2, P1 in a channel of gap 0 below: the beam held at an edge of the
     admissible amplitudes is no zero of the reduced gradient; both methods once
@@ -679,6 +680,7 @@ def test_one_mode_classified_from_probes_closer_than_the_next_zero():
     assert [e.stable for e in eqs] == [True, True, False]
 
 
+@pytest.mark.slow
 def test_two_modes_pressed_flat_at_gap_zero_is_no_traceback():
     """P4 at gap 0, two modes: the Newton step from the flat beam took F = inf
     beyond the obstacle's edge for a slope (a step of 6e11, a singular KKT
@@ -754,6 +756,7 @@ _BEAM = {"model": "gao", "length": 1.0, "E": 2.1e11, "nu": 0.3, "half_thickness"
          "width": 1.0}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("data, stable", [
     # two modes, no load, gap 0: w = 0 (an unstable KKT point) was missing
     ({"beam": {**_BEAM, "supports": "P4"}, "load": {"axial": 7606332094.006402},
@@ -895,7 +898,7 @@ _P3_CHANNEL = {
 
 
 @pytest.mark.parametrize("case", [
-    "no load",
+    pytest.param("no load", marks=pytest.mark.slow),
     pytest.param("up", marks=pytest.mark.slow),
     pytest.param("down", marks=pytest.mark.slow),
     pytest.param("table", marks=pytest.mark.slow),
@@ -941,6 +944,7 @@ def test_one_mode_zero_beside_the_flat_beam_is_the_flat_beam():
     assert len(flat) == 1 and np.all(flat[0].w == 0.0) and flat[0].status == "optimal"
 
 
+@pytest.mark.slow
 def test_two_modes_minimum_on_a_kink_of_f_is_stable():
     """A campaign's: P3 in a channel at gap 0, no load, two modes (10 elements).  A
     strict minimum at -1529.192816 J (independently second-order sufficient,
@@ -980,6 +984,7 @@ def _table_at_ceiling():
     return eqs
 
 
+@pytest.mark.slow
 def test_two_modes_minimum_whose_probes_reach_past_a_saddle_is_stable():
     """A campaign's: P3 held at a channel's ceiling (gap 0 below, 0.34 mm above)
     under a load table, two modes (10 elements).  A strict minimum at
@@ -1022,6 +1027,7 @@ def test_a_row_of_minima_in_an_unloaded_channel_is_searched_again():
     assert len(found) == 1 and found[0].stable and found[0].status == "optimal"
 
 
+@pytest.mark.slow
 def test_equilibria_closer_than_the_merging_distance_are_searched_in_their_own_square():
     """A campaign's: P1 on an obstacle 8.4e-6 m below, no load, two modes (10
     elements; S = 2.72).  Near the flat beam (|s| = 2.4e-5 S) lie a saddle on the

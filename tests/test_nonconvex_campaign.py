@@ -70,6 +70,7 @@ def test_default_mesh():
 
 
 # ---------------------------------------------------------------- found by the campaign
+@pytest.mark.slow
 def test_a_bound_above_the_answer_is_no_certificate():
     """A random campaign (seed 8802, draw 73): P2 held by an obstacle 3.7e-5 m below,
     24 elements.  The dense node programs bounded the energy 1.2e-6 J above the
@@ -317,6 +318,7 @@ def test_a_node_program_stopped_short_is_split_not_closed():
     assert rec["k"] == 2 and rec["unique"]
 
 
+@pytest.mark.slow
 def test_channel_near_the_limit_re_solved_in_its_own_scale():
     """Campaign scene 5:42: certified in 39 nodes, then re-solved in the answer's own
     scale (0.078 of the first), where boxes of amplitudes 100 times the answer's have

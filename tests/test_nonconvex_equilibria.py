@@ -374,6 +374,7 @@ def test_two_minima_without_an_unstable_equilibrium_between_them_are_inaccurate(
     assert all(e.status == "inaccurate" for e in eqs)
 
 
+@pytest.mark.slow
 def test_a_saddle_near_the_flat_beam_is_listed_polished_on_the_whole_beam():
     """A helper's campaign (seed 9501): P1 pressed at gap 0, two modes, 9 elements.
     The buckled beam and the flat one are strict minima; the saddle between them,

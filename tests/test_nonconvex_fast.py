@@ -213,6 +213,7 @@ def test_slices_by_the_whole_bordered_system_agree_with_the_dense_programs(suppo
     _slices_agree(fast, dense, k, np.random.default_rng(2))
 
 
+@pytest.mark.slow
 def test_slices_just_above_the_limit_on_a_fine_mesh_converge():
     """A helper's campaign (seed 9301, B2): P4 on a unilateral bed 3e-5 above the
     limit, 300 elements.  Every slice failed: the Hessian is nearly singular along
