@@ -613,3 +613,34 @@ def test_a_beam_pressed_a_nanometre_into_a_stiff_bed_is_a_stable_minimum(element
     assert eig[0] > 0.1 and pressed[0].stable
     # (two minima and no saddle listed: the list says it misses one)
     assert any(not e.stable for e in eqs) or all(e.status == "inaccurate" for e in eqs)
+
+
+def test_the_whole_beam_stability_is_the_independent_hessians():
+    # probes.hessian_stability (definiteness by banded Cholesky) against the least
+    # eigenvalue of the independent energy's Hessian relative to its K, at random
+    # beams on a bonded bed (smooth everywhere), below and above the limit
+    from nonconvex_independent import Discrete
+    from gaocvx import DiscreteProblem
+    from gaocvx.nonconvex.probes import hessian_stability
+    seen = set()
+    rng = np.random.default_rng(5)
+    for axial in (1e9, 3e9, 1.2e10):
+        scene = Scene.from_dict({"beam": {"model": "gao", "supports": "P4", "length": 1.0,
+                                          "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1,
+                                          "width": 1.0},
+                                 "load": {"q": -1e6, "axial": axial}, "mesh": {"elements": 8},
+                                 "foundation": {"gap": 0.001, "stiffness": 1e10,
+                                                "kind": "bilateral"}})
+        dp = DiscreteProblem(scene, check_convexity=False)
+        en = Discrete(scene, dp.W)
+        for amplitude in (1e-3, 0.3, 3.0, 30.0):
+            u = amplitude * rng.normal(size=dp.n)
+            verdict = hessian_stability(dp, u)
+            x = en.from_nodal(*dp.to_physical(u))
+            least = sla.eigh(en.hessian(x), en.stiffness(), eigvals_only=True)[0]
+            if verdict is not None:
+                assert verdict == (least > 0), (axial, amplitude, least)
+                seen.add(verdict)
+            else:
+                assert abs(least) < 1e-6
+    assert seen == {True, False}
