@@ -434,7 +434,7 @@ CURVE_MISSES = [
         "P2", {}, {"q": [[0.0, -13709.236722265015], [0.8592463806945426, -183561.32639273469],
                          [1.0, -48128.51782721932]], "axial": 12506666473.86398},
         {"gap": 0.0005114722483966589, "gap_above": 0.0020167654471801616}, 12,
-        [-147447.581098], id="P2-channel-variant"),
+        [-147447.581098], id="P2-channel-variant", marks=pytest.mark.slow),
     pytest.param(   # P1, table load, in a 1.8 cm channel: three stable equilibria on one wall
         "P1", {"length": 1.3156629065792407, "nu": 0.2566669171897021,
                "half_thickness": 0.14877741699091868},
@@ -1084,6 +1084,7 @@ def test_the_checks_local_search_stays_local():
         assert got == lower
 
 
+@pytest.mark.slow
 def test_one_mode_flat_beam_in_a_narrow_basin_is_stable():
     """A campaign's (`_PRESSED_FLAT`): w = 0 is a strict local minimum with a basin
     1e-5 S wide; listed stable, and so checked independently."""

@@ -187,6 +187,7 @@ def test_answer_held_by_a_stiff_bed_against_its_buckling_is_certified():
     assert rec["status"] == "optimal", rec.get("message")
 
 
+@pytest.mark.slow
 def test_fast_slices_on_a_stiff_bed_reach_their_slice():
     """A helper's scene (g125 at four times its mesh, 152 elements): P2 just above the
     limit (1.00012 P_bar_h) on a unilateral bed 0.9 mm below, 1.1e12 N/m^2.  The fast
@@ -302,6 +303,7 @@ def test_a_flat_minimum_the_search_stopped_short_of_is_no_alternative():
     assert _distinct(en, near, x) and not _distinct(en, _newton(en, near), x)
 
 
+@pytest.mark.slow
 def test_a_node_program_stopped_short_is_split_not_closed():
     """P1 at 3 P_bar_h on a unilateral bed, 256 elements (k = 2): one fast-path node's
     line search stalled at a box corner, its value 815 above its (valid, loose) bound.

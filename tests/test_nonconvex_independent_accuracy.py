@@ -144,6 +144,7 @@ def test_energy_and_gradient_against_40_digits(supports, elements, contact):
         assert abs(assembled_energy(en, x) - e) <= 1e-12 * scale
 
 
+@pytest.mark.slow
 def test_kkt_of_a_local_minimiser_at_256_elements():
     """A local minimiser of the checker's own energy (trust-region Newton) is stationary to
     far below the campaign's 1e-6, and the lowest eigenvalue check sees a local minimum
