@@ -312,3 +312,45 @@ def test_constrained_equilibria_known_are_proven_and_each_left_out_is_not(angle,
             ok, _, open_cells = cover(slice_grad, axes, zeros[:k] + zeros[k + 1:], c, 1e-12,
                                       rho, 20000, region=region)
             assert not ok and min(np.linalg.norm(o - z) for o in open_cells) < 2 * rho
+
+
+def test_a_vertex_of_the_amplitudes_does_not_hold_itself():
+    # The quadrant s1 >= a, s2 >= b with a, b grid values: its vertex (a, b), a grid
+    # sample, is an equilibrium (the gradient (1.06, 0.09) points into the quadrant:
+    # both constraints hold it).  Left out, its own sample must not cover it: every
+    # other point of a corner cell lies in the vertex's ellipse or is the vertex (a
+    # review's point: a sample on the rim may be an equilibrium with a gradient).
+    from gaocvx.nonconvex.fast_check import lp_min
+    from gaocvx.nonconvex.polygon import admissible_polygon
+    grad, jac, R, c = FIVE
+    axes = [np.linspace(-R, R, 9)] * 2
+    a, b = float(axes[0][2]), float(axes[1][3])
+    A_ub = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])
+    b_ub = np.array([R, -a, R, -b])
+
+    def support(m):
+        bound, z = lp_min(-m, A_ub, b_ub, np.zeros((0, 2)), np.zeros(0))
+        return -bound, z
+
+    region = admissible_polygon(support, [-R, -R], [R, R])
+
+    def slice_grad(s):
+        return np.full(2, np.nan) if s[0] < a or s[1] < b else grad(s)
+
+    corner = np.array([a, b])
+    assert np.all(grad(corner) > 0.05)       # held by both constraints
+    # the others: zeros inside, and on each edge where the derivative along it
+    # vanishes and the gradient points inward (by hand: s2 = 0 or |s|^2 = 1 on
+    # s1 = a; s1^3 + (b^2 - 2) s1 + 0.1 = 0 on s2 = b)
+    inner = [z for z in _zeros(grad, jac, R) if z[0] > a and z[1] > b]
+    edge = [np.array([a, 0.0]), np.array([a, (1.0 - a * a) ** 0.5])] + \
+        [np.array([r.real, b]) for r in np.roots([1.0, 0.0, b * b - 2.0, 0.1])
+         if abs(r.imag) < 1e-12 and r.real > a]
+    edge = [z for z in edge if (z[0] == a and grad(z)[0] >= 0) or (z[1] == b and grad(z)[1] >= 0)]
+    zeros = inner + edge + [corner]
+    rho = 1e-6 * R
+    ok, _, _ = cover(slice_grad, axes, zeros, c, 1e-12, rho, 20000, region=region)
+    assert ok
+    ok, _, open_cells = cover(slice_grad, axes, inner + edge, c, 1e-12, rho, 20000,
+                              region=region)
+    assert not ok and min(np.linalg.norm(o - corner) for o in open_cells) < 2 * rho

@@ -127,7 +127,7 @@ def cover(grad, axes, known, c, tol, rho, budget, samples=(), region=None) -> tu
     c = np.asarray(c, float)
     bound = tol if callable(tol) else (lambda p, g: tol)
     known = np.asarray(known, float).reshape(-1, 2)
-    P, G, T = [], [], []
+    P, G, T, own = [], [], [], []   # (own: may hold itself, :func:`_inside`)
     seen = set()
     sampled, open_cells = [], []
     failures = 0
@@ -148,6 +148,7 @@ def cover(grad, axes, known, c, tol, rho, budget, samples=(), region=None) -> tu
         P.append(key)
         G.append(g)
         T.append(float(bound(np.array(key), g)))
+        own.append(region is None or region.interior(np.array(key)))
         return True
 
     def sample(p):
@@ -193,7 +194,8 @@ def cover(grad, axes, known, c, tol, rho, budget, samples=(), region=None) -> tu
     # neighbours' samples of that size are in (one at a time, depth first, a cell
     # was split down to 1e-7 of its size that its neighbours' samples held)
     while cells and failures <= MAX_FAILED:
-        arrays = _usable(np.array(P).reshape(-1, 2), np.array(G).reshape(-1, 2), np.array(T), c)
+        arrays = _usable(np.array(P).reshape(-1, 2), np.array(G).reshape(-1, 2), np.array(T),
+                         np.array(own, bool), c)
         cells = [q for q in cells if not _near(q, known, rho) and
                  not _held(q, arrays, c, region)]
         children = []
@@ -214,8 +216,8 @@ def cover(grad, axes, known, c, tol, rho, budget, samples=(), region=None) -> tu
             if region is not None:
                 # (beyond the outer polygon, onto its rim -- 1e-9 of the way inwards,
                 # samples held none of the rim's points within 1e-4 of the square of
-                # a zero on it; and where the rim crosses the quarters' edges, held
-                # by themselves: the middles' projections held none near a zero)
+                # a zero on it; and where the rim crosses the quarters' edges, whose
+                # points the middles' projections held none of near a zero)
                 rim = [v for q in _quarters(cell) for v in region.rim_points(*q)]
                 new = [tuple(region.onto(p)) for p in new + rim]
             fresh = [p for p in new if (float(p[0]), float(p[1])) not in seen]
@@ -323,7 +325,7 @@ def prove(grad, search, zeros, axes, samples, c, dtol, S, rho, region=None) -> b
     return complete
 
 
-def _usable(P, G, T, c):
+def _usable(P, G, T, own, c):
     """The samples whose gradient exceeds its accuracy, with their ellipses' boxes.
 
     ``R_p`` lies in ``{d : (d - m)'C(d - m) < g'C^-1 g / 16}``, ``m = C^-1 g / 4``:
@@ -331,7 +333,7 @@ def _usable(P, G, T, c):
     ``c_i = 0``).
     """
     keep = np.linalg.norm(G, axis=1) > T
-    P, G, T = P[keep], G[keep], T[keep]
+    P, G, T, own = P[keep], G[keep], T[keep], own[keep]
     with np.errstate(divide="ignore", invalid="ignore"):
         inv = np.where(c > 0, 1.0 / np.where(c > 0, c, 1.0), np.inf)
         size = (G * G) @ np.where(np.isfinite(inv), inv, 0.0) / 16.0
@@ -339,7 +341,7 @@ def _usable(P, G, T, c):
         half = np.sqrt(size[:, None] * inv[None, :])
     lo = np.where(np.isfinite(half), centre - half, -np.inf)
     hi = np.where(np.isfinite(half), centre + half, np.inf)
-    return P, G, T, lo, hi
+    return P, G, T, own, lo, hi
 
 
 def _held(cell, arrays, c, region=None) -> bool:
@@ -347,7 +349,7 @@ def _held(cell, arrays, c, region=None) -> bool:
     by one sample's ellipse (its corners inside, but the sample itself); with a
     ``region``, or lies outside its outer polygon, or its part inside that
     polygon is held (that part's vertices inside one ellipse)."""
-    P, G, T, lo, hi = arrays
+    P, G, T, own, lo, hi = arrays
     x0, x1, y0, y1 = cell
     if region is not None and region.beyond([[x0, y0], [x0, y1], [x1, y0], [x1, y1]]):
         return True
@@ -355,7 +357,7 @@ def _held(cell, arrays, c, region=None) -> bool:
     near = (lo[:, 0] < x1) & (hi[:, 0] > x0) & (lo[:, 1] < y1) & (hi[:, 1] > y0)
     if not np.any(near):
         return False
-    P, G, T = P[near], G[near], T[near]
+    P, G, T, own = P[near], G[near], T[near], own[near]
     todo = np.ones((1, 1), bool)      # sub-rectangles not held yet, on the finest lattice
     for j in range(GEOMETRY + 1):
         m = 2 ** j
@@ -364,7 +366,7 @@ def _held(cell, arrays, c, region=None) -> bool:
         xs, ys = np.linspace(x0, x1, m + 1), np.linspace(y0, y1, m + 1)
         X, Y = np.meshgrid(xs, ys, indexing="ij")
         corners = np.stack([X.ravel(), Y.ravel()], axis=1)
-        inside = _inside(corners, P, G, T, c).reshape(m + 1, m + 1, -1)
+        inside = _inside(corners, P, G, T, own, c).reshape(m + 1, m + 1, -1)
         held = np.any(inside[:-1, :-1] & inside[1:, :-1] & inside[:-1, 1:] & inside[1:, 1:],
                       axis=2)
         if region is not None:
@@ -375,7 +377,7 @@ def _held(cell, arrays, c, region=None) -> bool:
             some = cut[:-1, :-1] | cut[1:, :-1] | cut[:-1, 1:] | cut[1:, 1:]
             for a, b in zip(*np.nonzero(todo & ~held & np.any(some, axis=2))):
                 part = region.clip(xs[a], xs[a + 1], ys[b], ys[b + 1], np.nonzero(some[a, b])[0])
-                held[a, b] = not len(part) or bool(np.any(np.all(_inside(part, P, G, T, c),
+                held[a, b] = not len(part) or bool(np.any(np.all(_inside(part, P, G, T, own, c),
                                                                    axis=0)))
         todo &= ~held
         if not todo.any():
@@ -389,14 +391,16 @@ def _quarters(cell) -> list:
     return [(x0, mx, y0, my), (mx, x1, y0, my), (x0, mx, my, y1), (mx, x1, my, y1)]
 
 
-def _inside(points, P, G, T, c) -> np.ndarray:
+def _inside(points, P, G, T, own, c) -> np.ndarray:
     """``(points, samples)``: whether each point lies in each sample's ellipse
-    (or is the sample itself: no zero, ``|g| > t``)."""
+    (or is the sample itself, when ``own``: no zero, ``|g| > t``; not on the
+    admissible amplitudes' rim, where the obstacle may hold an equilibrium
+    whose gradient is not zero -- a review's)."""
     D = points[:, None, :] - P[None, :, :]
     dist = np.linalg.norm(D, axis=2)
     inside = 2.0 * (c[0] * D[..., 0] ** 2 + c[1] * D[..., 1] ** 2) + T * dist \
         < np.einsum("ijk,jk->ij", D, G)
-    return inside | (dist == 0.0)
+    return inside | ((dist == 0.0) & own[None, :])
 
 
 def _near(cell, known, rho) -> bool:

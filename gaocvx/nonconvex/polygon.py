@@ -82,6 +82,18 @@ class Polygon:
         P = np.asarray(points, float).reshape(-1, 2)
         return P @ self.normals.T > self.offsets
 
+    def interior(self, p, margin: float = 1e-9) -> bool:
+        """Whether ``p`` lies inside the inner polygon farther than ``margin`` of its
+        size from each edge (so inside the amplitudes, off their rim)."""
+        V = self.vertices
+        if len(V) < 3:
+            return False
+        e = np.roll(V, -1, axis=0) - V
+        d = np.asarray(p, float) - V
+        size = float(np.max(np.abs(V - V.mean(axis=0))))
+        dist = (e[:, 0] * d[:, 1] - e[:, 1] * d[:, 0]) / np.linalg.norm(e, axis=1)
+        return bool(np.all(dist > margin * size))
+
     def within(self, p) -> bool:
         """Whether ``p`` lies in the inner polygon (so is an admissible amplitude)."""
         return len(self.vertices) >= 3 and _in_convex(self.vertices, np.asarray(p, float))
