@@ -129,7 +129,8 @@ def hessian_stability(dp, u, margin: float = 1e-3):
     Only where the energy is twice differentiable in a neighbourhood of ``u``: no
     obstacle, and a unilateral foundation's points all farther from its edge
     (``g - w = 0``) than ``margin`` of the largest ``|g - w|`` and ``|w|`` there
-    (else None); and up to :data:`.whole_beam.MAX_UNKNOWNS` DOFs (dense).  Why:
+    (else None); and up to :data:`.whole_beam.MAX_UNKNOWNS` DOFs, where eig_tol
+    was measured.  Why:
     the reduced function's probes classify at 1e-6 S, and a beam pressed
     1.5e-9 m into a stiff bed at gap 0 (S = 0.2; P4, two modes, 2 elements) lifts
     off within that step: listed unstable, a strict local minimum (the
