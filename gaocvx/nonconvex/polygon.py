@@ -51,7 +51,7 @@ import numpy as np
 __all__ = ["Polygon", "admissible_polygon", "program_polygon"]
 
 # Linear programs the polygon may take (measured: 12-13 where the obstacle is below
-# only, the whole box; 113-177 for channels at 8 elements, 40-90 vertices).  Beyond
+# only, the whole box; 113-177 for channels at 8 elements, 56-84 vertices).  Beyond
 # it the outer polygon is looser, never wrong.
 MAX_LPS = 200
 
@@ -74,8 +74,7 @@ class Polygon:
 
     def outside(self, points) -> np.ndarray:
         """Whether each point lies outside the outer polygon (so outside the amplitudes)."""
-        P = np.asarray(points, float).reshape(-1, 2)
-        return np.any(P @ self.normals.T > self.offsets, axis=1)
+        return np.any(self.cut(points), axis=1)
 
     def cut(self, points) -> np.ndarray:
         """Whether each point lies outside at least one outer half-plane: a
@@ -90,15 +89,12 @@ class Polygon:
         V = self.vertices
         if len(V) < 3:
             return False
-        e = np.roll(V, -1, axis=0) - V
-        d = np.asarray(p, float) - V
         size = float(np.max(np.abs(V - V.mean(axis=0))))
-        dist = (e[:, 0] * d[:, 1] - e[:, 1] * d[:, 0]) / np.linalg.norm(e, axis=1)
-        return bool(np.all(dist > margin * size))
+        return bool(np.all(_inner_distances(V, p) > margin * size))
 
     def within(self, p) -> bool:
         """Whether ``p`` lies in the inner polygon (so is an admissible amplitude)."""
-        return len(self.vertices) >= 3 and _in_convex(self.vertices, np.asarray(p, float))
+        return len(self.vertices) >= 3 and bool(np.all(_inner_distances(self.vertices, p) >= 0))
 
     def clip(self, x0, x1, y0, y1, planes=None) -> np.ndarray:
         """The vertices of the rectangle's part inside the outer polygon (none: empty);
@@ -298,11 +294,12 @@ def _clip_half_plane(poly, n, h) -> np.ndarray:
     return np.array(out).reshape(-1, 2)
 
 
-def _in_convex(V, p) -> bool:
-    """Whether ``p`` lies in the counter-clockwise convex polygon ``V``."""
+def _inner_distances(V, p) -> np.ndarray:
+    """``p``'s signed distances from the counter-clockwise polygon ``V``'s edges
+    (positive inside)."""
     e = np.roll(V, -1, axis=0) - V
-    d = p - V
-    return bool(np.all(e[:, 0] * d[:, 1] - e[:, 1] * d[:, 0] >= 0))
+    d = np.asarray(p, float) - V
+    return (e[:, 0] * d[:, 1] - e[:, 1] * d[:, 0]) / np.linalg.norm(e, axis=1)
 
 
 def _nearest_on_rim(V, p) -> np.ndarray:
