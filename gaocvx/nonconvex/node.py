@@ -205,6 +205,12 @@ class NodeProgram:
             cons.append(obs)
         return s, v, cp.sum(terms), cons, obs
 
+    def amplitude_rows(self) -> np.ndarray:
+        """``D`` with ``s = D u``: in ``u = Phi s + v`` with ``(G Phi)'v = 0``,
+        ``s = ((G Phi)'Phi)^-1 (G Phi)'u`` (the rows the amplitude range and the
+        two-mode polygon, :mod:`.polygon`, are bounded by)."""
+        return np.linalg.solve(self.GPhi.T @ self.modes.phi, self.GPhi.T)
+
     def _amplitude_range(self):
         """Each amplitude's range over the admissible set, as the fast path's
         (:func:`.fast_check.amplitude_range`): infinite without an obstacle.
@@ -224,10 +230,10 @@ class NodeProgram:
             return np.full(k, -math.inf), np.full(k, math.inf)
         from .fast_check import lp_ranges, padded
 
-        # In u = Phi s + v with (G Phi)'v = 0: s = ((G Phi)'Phi)^-1 (G Phi)'u; min / max
-        # s_i over rows u >= levels.  (Not in (s, v) with the equality rows: their
-        # round-off entries, 2e-17, made HiGHS fail, "Solve error", on a P1 beam.)
-        D = np.linalg.solve(self.GPhi.T @ self.modes.phi, self.GPhi.T)
+        # min / max s_i = (D u)_i over rows u >= levels.  (Not in (s, v) with the
+        # equality rows: their round-off entries, 2e-17, made HiGHS fail, "Solve
+        # error", on a P1 beam.)
+        D = self.amplitude_rows()
         n = self.dp.n
         lo, hi = lp_ranges(D, -sp.csr_matrix(self.rows), -self.levels, np.zeros((0, n)), np.zeros(0))
         return padded(lo, hi)

@@ -235,7 +235,7 @@ def program_polygon(prog, lo, hi, tol: float = 1e-7):
         A_ub, b_ub = -sp.csr_matrix(mf.A), mf.gap(np.zeros(mf.n))
         A_eq, b_eq = sp.csr_matrix(mf.C), -mf.link(np.zeros(mf.n))
     else:
-        D = np.linalg.solve(prog.GPhi.T @ prog.modes.phi, prog.GPhi.T)
+        D = prog.amplitude_rows()
         origin = np.zeros(2)
         A_ub, b_ub = -sp.csr_matrix(prog.rows), -np.asarray(prog.levels, float)
         A_eq, b_eq = sp.csr_matrix((0, D.shape[1])), np.zeros(0)
