@@ -109,9 +109,9 @@ def amplitude_range(prog):
     infinite, and so is a side HiGHS fails on or whose dual residual is not
     round-off (a weaker range, never a narrower one).
     """
-    mf = prog.mf
-    lo, hi = lp_ranges(prog.B, -mf.A, mf.gap(np.zeros(mf.n)), mf.C, -mf.link(np.zeros(mf.n)))
-    return padded(lo + prog.s_origin, hi + prog.s_origin)
+    D, origin, *lp = prog.admissible_lp()
+    lo, hi = lp_ranges(D, *lp)
+    return padded(lo + origin, hi + origin)
 
 
 def padded(lo, hi):

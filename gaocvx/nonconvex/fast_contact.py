@@ -151,6 +151,15 @@ class FastContactProgram(FastProgram):
         from .fast_check import amplitude_range
         self.smin, self.smax = amplitude_range(self)
 
+    def admissible_lp(self):
+        """The admissible amplitudes as linear programs' data ``(D, origin, A_ub,
+        b_ub, A_eq, b_eq)``: ``s = D z + origin`` over ``A_ub z <= b_ub, A_eq z =
+        b_eq``, the mixed form's obstacle and linking rows (the amplitude range's,
+        :func:`.fast_check.amplitude_range`, and the two-mode polygon's,
+        :mod:`.polygon`)."""
+        mf, zero = self.mf, np.zeros(self.mf.n)
+        return self.B, self.s_origin, -mf.A, mf.gap(zero), mf.C, -mf.link(zero)
+
     # ------------------------------------------------------------------ pieces
     def _state(self, z, lam, eta, rho, rb, lo, hi, slope):
         """Value, gradient, banded Hessian and box weights of the (augmented) Lagrangian at z."""

@@ -205,11 +205,21 @@ class NodeProgram:
             cons.append(obs)
         return s, v, cp.sum(terms), cons, obs
 
-    def amplitude_rows(self) -> np.ndarray:
-        """``D`` with ``s = D u``: in ``u = Phi s + v`` with ``(G Phi)'v = 0``,
-        ``s = ((G Phi)'Phi)^-1 (G Phi)'u`` (the rows the amplitude range and the
-        two-mode polygon, :mod:`.polygon`, are bounded by)."""
-        return np.linalg.solve(self.GPhi.T @ self.modes.phi, self.GPhi.T)
+    def admissible_lp(self):
+        """The admissible amplitudes as linear programs' data ``(D, origin, A_ub,
+        b_ub, A_eq, b_eq)``: ``s = D u + origin`` over ``A_ub u <= b_ub, A_eq u =
+        b_eq`` (the amplitude range's and the two-mode polygon's, :mod:`.polygon`).
+
+        In ``u = Phi s + v`` with ``(G Phi)'v = 0``, ``s = ((G Phi)'Phi)^-1 (G
+        Phi)'u``, over the obstacle's rows ``u >= levels``.  (Not in ``(s, v)``
+        with the equality rows: their round-off entries, 2e-17, made HiGHS fail,
+        "Solve error", on a P1 beam.)  None without an obstacle.
+        """
+        if self.rows is None:
+            return None
+        D = np.linalg.solve(self.GPhi.T @ self.modes.phi, self.GPhi.T)
+        return (D, np.zeros(self.k), -sp.csr_matrix(self.rows), -np.asarray(self.levels, float),
+                sp.csr_matrix((0, D.shape[1])), np.zeros(0))
 
     def _amplitude_range(self):
         """Each amplitude's range over the admissible set, as the fast path's
@@ -225,18 +235,13 @@ class NodeProgram:
         its end is cut to it (no admissible point is lost: the range is a
         superset).
         """
-        k = self.k
         if self.rows is None:
-            return np.full(k, -math.inf), np.full(k, math.inf)
+            return np.full(self.k, -math.inf), np.full(self.k, math.inf)
         from .fast_check import lp_ranges, padded
 
-        # min / max s_i = (D u)_i over rows u >= levels.  (Not in (s, v) with the
-        # equality rows: their round-off entries, 2e-17, made HiGHS fail, "Solve
-        # error", on a P1 beam.)
-        D = self.amplitude_rows()
-        n = self.dp.n
-        lo, hi = lp_ranges(D, -sp.csr_matrix(self.rows), -self.levels, np.zeros((0, n)), np.zeros(0))
-        return padded(lo, hi)
+        D, origin, *lp = self.admissible_lp()
+        lo, hi = lp_ranges(D, *lp)
+        return padded(lo + origin, hi + origin)
 
     def _solve(self, problem):
         """Solve down the ladder; returns the status and the gap tolerance that was met."""

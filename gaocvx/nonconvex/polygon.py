@@ -229,16 +229,8 @@ def program_polygon(prog, lo, hi, tol: float = 1e-7):
     prog = getattr(prog, "prog", prog)
     if getattr(prog, "rows", None) is None:
         return None
-    if hasattr(prog, "mf"):
-        mf = prog.mf
-        D, origin = np.asarray(prog.B, float), np.asarray(prog.s_origin, float)
-        A_ub, b_ub = -sp.csr_matrix(mf.A), mf.gap(np.zeros(mf.n))
-        A_eq, b_eq = sp.csr_matrix(mf.C), -mf.link(np.zeros(mf.n))
-    else:
-        D = prog.amplitude_rows()
-        origin = np.zeros(2)
-        A_ub, b_ub = -sp.csr_matrix(prog.rows), -np.asarray(prog.levels, float)
-        A_eq, b_eq = sp.csr_matrix((0, D.shape[1])), np.zeros(0)
+    D, origin, A_ub, b_ub, A_eq, b_eq = prog.admissible_lp()
+    D, origin, A_ub = np.asarray(D, float), np.asarray(origin, float), sp.csr_matrix(A_ub)
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
     # the box's sides as rows (a bounded program), the directions normalised as
     # lp_ranges does (HiGHS's "numerical difficulties" with B's rows as they are)
