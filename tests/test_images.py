@@ -70,6 +70,32 @@ def test_an_image_listed_already_is_not_polished_again():
     assert not calls
 
 
+@pytest.mark.parametrize("polished", [False, True])
+def test_an_image_listed_not_optimal_gives_way_to_the_polished_one(polished):
+    # (a slice's beam near the flat one that failed its check, 1e-6 of its size off
+    # the exact image: the polish from the mirrored beam certifies the image)
+    dp, calls = _dp(), []
+    e = _eq(W, SLOPE)
+    twin = _eq(np.asarray(W[::-1]) * (1 + 1e-6), -np.asarray(SLOPE[::-1]), polished=polished,
+               status="inaccurate")
+    out = complete_beams(dp, _polish_to_itself(dp, calls), [e, twin])
+    assert len(calls) == 1 and len(out) == 2 and out[0] is e and out[1] is not twin
+    assert out[1].status == "optimal"
+    np.testing.assert_allclose(out[1].w, W[::-1], rtol=0, atol=1e-20)
+
+
+def test_an_entry_not_optimal_elsewhere_stays():
+    dp = _dp()
+    e = _eq(W, SLOPE)
+    other = _eq(np.asarray(W) * 2.0, SLOPE, status="inaccurate")   # not the image's beam
+    out = complete_beams(dp, _polish_to_itself(dp, []), [e, other])
+    assert len(out) == 3 and out[0] is e and out[1] is other
+    # and where the polish fails, the entry at the image stays as it is
+    twin = _eq(W[::-1], -np.asarray(SLOPE[::-1]), status="inaccurate")
+    kept = complete_beams(dp, lambda u: None, [e, twin])
+    assert len(kept) == 2 and kept[0] is e and kept[1] is twin
+
+
 def test_nothing_is_added_where_the_polish_fails_or_returns_a_listed_beam():
     dp = _dp()
     e = _eq(W, SLOPE)

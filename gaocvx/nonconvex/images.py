@@ -8,7 +8,7 @@ where it stands for the image of an ``optimal`` one (:func:`settle_twins`), and
 to try once more the image of an ``optimal`` entry that is still not listed
 (:func:`complete_pairs`).  After every search with an obstacle (one mode or
 two), the mirrored beam of each entry polished on the whole beam is polished in
-turn (:func:`complete_beams`).  None assumes the load symmetric: a seed is only
+turn, an entry there that is not ``optimal`` giving way to it (:func:`complete_beams`).  None assumes the load symmetric: a seed is only
 a seed, and an image is listed only where it passes the search's own tests.
 """
 
@@ -130,7 +130,8 @@ def complete_pairs(dp, modes, grad, out, S, settle) -> list:
 def complete_beams(dp, polish, out) -> list:
     """``out`` with the mirror image of each entry polished on the whole beam added where
     the image, polished in turn (``polish``, :func:`.whole_beam.polisher`), passes
-    the certificate and is not listed (deflection and slope within ``SAME_BEAM``).
+    the certificate and is not listed (deflection and slope within ``SAME_BEAM``);
+    an entry listed there that is not ``optimal`` gives way to it.
 
     The searches find an equilibrium through its amplitudes, and near the flat
     beam an image may be missed where the warm starts differ: a P1 beam pressed
@@ -140,6 +141,11 @@ def complete_beams(dp, polish, out) -> list:
     mirrored beam itself, and listed only as the polish returns it: nothing is
     assumed of the load (an asymmetric load's image is no equilibrium, and the
     polish fails or returns another, which is listed only if it is not).
+    An entry at the image that failed its check (a slice's beam near the flat
+    one, accurate to the scene only) is replaced by the polished image: a P1
+    beam at gap 0 under a uniform load (16 elements) listed a saddle at
+    4.70884767 J ``optimal`` and its image, whose own polish had failed from the
+    slice's beam, ``inaccurate``.
 
     Parameters
     ----------
@@ -157,18 +163,24 @@ def complete_beams(dp, polish, out) -> list:
     """
     if polish is None:
         return out
-    added = []
+    out, added = list(out), []
     for e in [e for e in out if e is not None and e.whole_beam and e.status == "optimal"]:
         for r in reflections(dp, dp.from_physical(e.w, e.slope))[:1]:
             w, slope = dp.to_physical(r)
             image = SimpleNamespace(w=w, slope=slope, x=e.x)
-            if any(same_beam(image, o, SAME_BEAM) for o in out + added if o is not None):
+            sure = [o for o in out + added if o is not None and o.status == "optimal"]
+            if any(same_beam(image, o, SAME_BEAM) for o in sure):
                 continue
             new = polish(r)
-            if new is None or any(same_beam(new, o, SAME_BEAM)
-                                  for o in out + added if o is not None):
+            if new is None or any(same_beam(new, o, SAME_BEAM) for o in sure):
                 continue
-            log.info("equilibria: the mirror image of the polished entry at s = %s added",
-                     e.amplitudes)
+            # (an entry at the polished image that is not `optimal` is that image, its
+            # beam a slice's: it gives way to the polished one)
+            stale = [o for o in out + added if o is not None and same_beam(new, o, SAME_BEAM)]
+            out = [o for o in out if not any(o is t for t in stale)]
+            added = [o for o in added if not any(o is t for t in stale)]
+            log.info("equilibria: the mirror image of the polished entry at s = %s %s",
+                     e.amplitudes, f"replaces {len(stale)} listed there, not optimal"
+                     if stale else "added")
             added.append(new)
     return out + added
