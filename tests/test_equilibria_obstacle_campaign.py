@@ -1268,7 +1268,13 @@ def test_an_inaccurate_mirror_twin_near_the_flat_beam_is_settled():
     `optimal`, its mirror image 1e-7 of its size from it listed `inaccurate`
     (the check failing by round-off at 1e-5 m of deflection).  The image is
     settled by the exact image, which passes the search's check, and every entry
-    passes the independent one."""
+    passes the independent one.
+
+    No entry is left not `optimal` beside an `optimal` mirror image.  (The
+    ellipses' proof's rounds list further saddles near the flat beam, 4.705-4.717
+    J; those whose slices' beams fail the check, with their polish, and that
+    have no `optimal` image are listed `inaccurate`, and still pass the
+    independent check.  Which of them are depends on the searches' round-off.)"""
     from gaocvx import Scene
     scene = Scene.from_dict({
         "beam": {**_BEAM, "supports": "P1"},
@@ -1276,9 +1282,14 @@ def test_an_inaccurate_mirror_twin_near_the_flat_beam_is_settled():
         "mesh": {"elements": 16}, "obstacle": {"gap": 0.0}})
     eqs = equilibria(scene)
     _checked(scene, eqs)
-    assert all(e.status == "optimal" for e in eqs)
+    for e in eqs:
+        if e.status != "optimal":
+            image = e.w[::-1]
+            assert not any(o.status == "optimal" and np.allclose(
+                o.w, image, rtol=0, atol=1e-4 * np.max(np.abs(e.w))) for o in eqs), e.energy
     pair = [e for e in eqs if abs(e.energy - 4.70503104) <= 1e-7]
     assert len(pair) == 2 and not any(e.stable for e in pair)
+    assert all(e.status == "optimal" for e in pair)
     assert np.allclose(pair[0].w, pair[1].w[::-1], rtol=0, atol=1e-6 * np.max(np.abs(pair[0].w)))
 
 
