@@ -8,8 +8,9 @@ where it stands for the image of an ``optimal`` one (:func:`settle_twins`), and
 to try once more the image of an ``optimal`` entry that is still not listed
 (:func:`complete_pairs`).  After every search with an obstacle (one mode or
 two), the mirrored beam of each entry polished on the whole beam is polished in
-turn, an entry there that is not ``optimal`` giving way to it (:func:`complete_beams`).  None assumes the load symmetric: a seed is only
-a seed, and an image is listed only where it passes the search's own tests.
+turn, an entry there that is not ``optimal`` giving way to it
+(:func:`complete_beams`).  None assumes the load symmetric: a seed is only a
+seed, and an image is listed only where it passes the search's own tests.
 """
 
 from __future__ import annotations
