@@ -320,8 +320,8 @@ def test_slices_failing_along_the_rim_do_not_end_the_proof():
     # rim, as next to a narrow wedge of an obstacle's amplitudes; every zero lies
     # 0.35 or more from the strip.  The other samples' ellipses hold the strip (the
     # proof gave up at its 21st failure before: not proven); with the zero next to
-    # the strip left out it is not proven, and an unholdable strip (0.2 wide, the ellipses reaching
-    # not across it) ends the proof within the failures allowed.
+    # the strip left out it is not proven, and an unholdable strip (0.2 wide, the
+    # ellipses reaching not across it) ends the proof within the failures allowed.
     grad, jac, R, c = FIVE
     n, h = np.array([0.0, 1.0]), 1.45
     region = _cut(n, h, R)
