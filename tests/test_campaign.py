@@ -206,6 +206,7 @@ def _run(seed, count, slow=False):
         return run_campaign(seed, count, slow=slow)
 
 
+@pytest.mark.slow
 def test_campaign_fast():
     """A seeded subset of the random campaign: no method optimal and wrong."""
     records = _run(FAST_SEED, FAST_COUNT)

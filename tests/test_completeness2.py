@@ -79,6 +79,7 @@ def test_the_reference_finds_the_zeros_solved_by_hand():
     assert all(min(np.linalg.norm(z - f) for f in found) < 1e-9 for z in FIVE_ZEROS)
 
 
+@pytest.mark.slow
 def test_every_zero_known_is_proven_and_each_left_out_is_not():
     grad, jac, R, c = FIVE
     axes = [np.linspace(-R, R, 9)] * 2
@@ -93,6 +94,7 @@ def test_every_zero_known_is_proven_and_each_left_out_is_not():
         assert min(np.linalg.norm(o - z) for o in open_cells) < 2 * rho
 
 
+@pytest.mark.slow
 def test_zeros_left_out_are_found_from_the_open_cells():
     grad, jac, R, c = FIVE
     axes = [np.linspace(-R, R, 9)] * 2
@@ -124,6 +126,7 @@ def test_a_failed_solve_defeats_the_proof():
 @given(b=st.floats(0.3, 2.0), a1=st.floats(0.0, 1.0), a2=st.floats(0.0, 1.0),
        m=st.tuples(st.floats(-3.0, 1.0), st.floats(-3.0, 1.0), st.floats(-1.5, 1.5)),
        q=st.tuples(st.floats(-1.0, 1.0), st.floats(-1.0, 1.0)), pick=st.integers(0, 8))
+@pytest.mark.slow
 def test_a_zero_left_out_is_never_proven_missing(b, a1, a2, m, q, pick):
     grad, jac, R, c = _quartic(b, a1, a2, [[m[0], m[2]], [m[2], m[1]]], q)
     zeros = _zeros(grad, jac, R, starts=15)
@@ -137,6 +140,7 @@ def test_a_zero_left_out_is_never_proven_missing(b, a1, a2, m, q, pick):
     assert not ok
 
 
+@pytest.mark.slow
 def test_seeded_quartics_with_their_zeros_known_are_mostly_proven():
     rng = np.random.default_rng(2027)
     proven = 0
@@ -191,6 +195,7 @@ def _blind(monkeypatch, region, proof_sees=True):
     monkeypatch.setattr(completeness2, "proven_zeros", proof)
 
 
+@pytest.mark.slow
 def test_a_saddle_the_search_missed_is_found_by_the_proof(monkeypatch, two_mode_list):
     upper = [e for e in two_mode_list if e.amplitudes[1] > 0.5]
     assert len(upper) == 1 and not upper[0].stable
@@ -201,12 +206,14 @@ def test_a_saddle_the_search_missed_is_found_by_the_proof(monkeypatch, two_mode_
                for e in eqs) < 1e-6 * np.linalg.norm(upper[0].amplitudes)
 
 
+@pytest.mark.slow
 def test_a_list_missing_a_saddle_is_not_proven(monkeypatch):
     _blind(monkeypatch, lambda s: s[1] > 0.5, proof_sees=False)
     eqs = equilibria(Scene.from_dict(TWO_MODES))
     assert len(eqs) == 4 and all(e.complete is False for e in eqs)
 
 
+@pytest.mark.slow
 def test_a_two_mode_list_with_an_obstacle_is_proven_complete():
     # (over the admissible amplitudes' polygon, gaocvx.nonconvex.polygon)
     data = {**TWO_MODES, "obstacle": {"gap": 0.002}}
@@ -236,6 +243,7 @@ def test_with_an_obstacle_a_saddle_left_out_is_not_proven(monkeypatch):
     assert seen["verdict"] is False and all(e.complete is False for e in eqs)
 
 
+@pytest.mark.slow
 def test_the_cli_says_whether_a_two_mode_list_is_proven(tmp_path, capsys, monkeypatch):
     from test_completeness import cli_says_whether_proven
     path = tmp_path / "p1.toml"
@@ -246,6 +254,7 @@ def test_the_cli_says_whether_a_two_mode_list_is_proven(tmp_path, capsys, monkey
                             "the list is not proven complete (the reduced gradient's bounds")
 
 
+@pytest.mark.slow
 def test_an_inaccurate_copy_of_a_listed_saddle_is_dropped_from_a_proven_list():
     """A P2 beam on a bonded bed at 1.001 lambda_2 (a helper's independent campaign):
     three equilibria, by an independent energy's multi-start; the list once held a
@@ -290,6 +299,7 @@ def _constrained(grad, jac, R, n, h):
 
 
 @pytest.mark.parametrize("angle, h", [(np.pi, 1.2), (2.5, 0.6), (-2.2, 0.3), (0.3, 0.9)])
+@pytest.mark.slow
 def test_constrained_equilibria_known_are_proven_and_each_left_out_is_not(angle, h):
     # an obstacle's admissible amplitudes: a half-plane, F infinite (the gradient
     # NaN) beyond it; equilibria on its edge too, where the constraint holds them
@@ -314,6 +324,7 @@ def test_constrained_equilibria_known_are_proven_and_each_left_out_is_not(angle,
             assert not ok and min(np.linalg.norm(o - z) for o in open_cells) < 2 * rho
 
 
+@pytest.mark.slow
 def test_slices_failing_along_the_rim_do_not_end_the_proof():
     # The amplitudes s2 <= 1.45 of FIVE (no equilibrium on that rim: the gradient
     # points outward along it), the slices failing in a strip 0.1 wide along the
@@ -344,6 +355,7 @@ def test_slices_failing_along_the_rim_do_not_end_the_proof():
     assert not ok and len(sampled) < 20000
 
 
+@pytest.mark.slow
 def test_a_vertex_of_the_amplitudes_does_not_hold_itself():
     # The quadrant s1 >= a, s2 >= b with a, b grid values: its vertex (a, b), a grid
     # sample, is an equilibrium (the gradient (1.06, 0.09) points into the quadrant:

@@ -65,6 +65,7 @@ def test_first_rung_does_not_equilibrate():
 
 
 @pytest.mark.parametrize("supports", ["P1", "P4"])
+@pytest.mark.slow
 def test_obstacle_certified_at_8192_elements(supports):
     """A node in point contact (P1) and a flat contact zone (P4) at 8192 elements: with
     equilibration Clarabel left stationarity 1.4e-5 (P1), a node 7e-11 W inside the

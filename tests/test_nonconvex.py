@@ -411,6 +411,7 @@ def test_mesh_convergence_of_the_buckled_energy_and_shape():
 
 @pytest.mark.parametrize("kw", [dict(q=-1e7, axial=1.3e9),
                                 dict(q=-2e7, axial=3e9, foundation=(0.002, 1e10))])
+@pytest.mark.slow
 def test_fast_path_agrees_with_the_dense_programs_and_reaches_fine_meshes(kw):
     from gaocvx import DiscreteProblem
     from gaocvx.nonconvex.minimum import solve_global
@@ -449,6 +450,7 @@ def test_branch_and_bound_time_limit_ends_uncertified(monkeypatch):
 
 
 @pytest.mark.parametrize("eps", [1e-9, 1e-10])
+@pytest.mark.slow
 def test_mirror_minimiser_reported_just_above_the_limit(eps):
     """Without load the mirror image of a buckled minimiser is one too, however close
     P is to P_bar_h (a new-user trial found unique = true at 1e-9 above it: the leaves

@@ -173,6 +173,7 @@ def test_equilibria_and_path_take_a_scene_dict_as_solve_does():
 
 # --------------------------------------------------------------- what a path skips
 
+@pytest.mark.slow
 def test_path_takes_two_unstable_modes_and_skips_three():
     """The documented limit: k = 2 is searched (stationary2), k >= 3 is skipped.
 

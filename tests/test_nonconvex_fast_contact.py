@@ -149,6 +149,7 @@ def test_dense_amplitude_range_of_an_unbounded_side_is_found_without_solver_fail
     assert np.all(prog.smin == -math.inf) and np.all(prog.smax == math.inf)
 
 
+@pytest.mark.slow
 def test_dense_programs_certify_the_beam_pressed_into_a_channel():
     """Clarabel did not prove the boxes beyond the channel's ceiling infeasible
     ("error", "infeasible_inaccurate"); each kept its parent's bound and the search
@@ -311,6 +312,7 @@ def test_certified_energies_converge_with_the_mesh(kw):
     assert order >= 3.5, (energies, order)
 
 
+@pytest.mark.slow
 def test_json_output_stays_json_when_highs_fails_in_presolve(capfd, tmp_path):
     """A hidden-scene trial's P1 beam on an obstacle with three modes: HiGHS's presolve
     failed ("Solve error") on the amplitude range of the third mode, an unbounded LP,
@@ -334,6 +336,7 @@ def test_json_output_stays_json_when_highs_fails_in_presolve(capfd, tmp_path):
     assert "Highs" not in out + err and "linprog status" not in err
 
 
+@pytest.mark.slow
 def test_three_modes_on_an_obstacle_take_the_fast_path_on_coarse_meshes():
     """A hidden-scene trial's P4 beam on an obstacle 1 mm below at 15 P_bar_h (k = 3,
     24 elements): the dense programs ran to their 4000 nodes (46 s); the fast path,

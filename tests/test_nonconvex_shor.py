@@ -124,6 +124,7 @@ def test_without_load_the_relaxation_averages_the_mirror_minimisers(supports, ax
     assert abs(rel) <= TOL_LOWER
 
 
+@pytest.mark.slow
 def test_random_small_scenes():
     """Seeded scenes above P_bar_h on 4-8 elements: the bound always, the minimiser where tight.
 

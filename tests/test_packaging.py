@@ -10,9 +10,12 @@ import subprocess
 import sys
 import zipfile
 
+import pytest
+
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 
+@pytest.mark.slow
 def test_wheel_holds_every_module(tmp_path):
     # a copy: setuptools reuses a build/ directory left in the source tree
     src = tmp_path / "src"

@@ -159,6 +159,7 @@ def test_sweep_reports_bad_values_and_goes_on(scene_file, capsys):
     assert lines[1]["status"] == lines[2]["status"] == "optimal"
 
 
+@pytest.mark.slow
 def test_dask_missing_or_unreachable_is_a_clear_error():
     base = Scene.from_dict(scene_dict(foundation=(0.007, 5e8), q=-5e8, elements=8))
     with pytest.raises(SceneError, match="^--dask"):
