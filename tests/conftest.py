@@ -107,3 +107,11 @@ def bed_scene_above_the_limit(ratio=3.0, elements=256):
     data["load"]["axial"] = ratio * DiscreteProblem(Scene.from_dict(data),
                                                     check_convexity=False).P_bar_h
     return data
+
+
+@pytest.hookimpl(tryfirst=True)  # before ``-m`` selects by marker
+def pytest_collection_modifyitems(items):
+    """A test marked ``heavy`` is slow too: ``-m "not slow"`` leaves it out."""
+    for item in items:
+        if item.get_closest_marker("heavy") is not None:
+            item.add_marker(pytest.mark.slow)

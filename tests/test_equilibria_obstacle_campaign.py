@@ -322,7 +322,7 @@ def test_default_equilibria_with_an_obstacle_are_independently_right(draw):
     assert not rec["violations"], rec["violations"]
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 def test_two_modes_in_a_channel_at_gap_zero_has_its_equilibrium():
     """k = 2, P1 in a channel of gap 0 below: the beam held at an edge of the
     admissible amplitudes is no zero of the reduced gradient; both methods once
@@ -331,7 +331,7 @@ def test_two_modes_in_a_channel_at_gap_zero_has_its_equilibrium():
     assert not rec["violations"], rec["violations"]
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 @pytest.mark.parametrize("seed", [2, 3])
 def test_fast_and_dense_equilibria_against_the_independent_energy(seed):
     """Eight scenes per seed by both methods: nothing wrong on the fast path (the
@@ -350,6 +350,7 @@ def test_fast_and_dense_equilibria_against_the_independent_energy(seed):
     70,   # gap 2e-5 m: stationarity 11
     32,   # w = 0 returned as 1e-13 m: stationarity 1.4e-3
 ])
+@pytest.mark.slow
 def test_the_dense_programs_call_no_deflection_optimal_that_is_no_kkt_point(draw):
     """The dense programs (``fast=False``; the fallback of a failed slice) reported
     deflections `optimal` by their reduced gradient alone, no KKT points of the
@@ -378,6 +379,7 @@ UNLOADED_ENDS = [[0.0, 0.0], [0.3, 0.0], [0.5, 1.0], [0.7, 0.0], [1.0, 0.0]]
     (UNLOADED_ENDS, -1e5, 2.0),    # the flat beam and the unstable one next to it missed
     ([[0.0, 0.0], [1.0, 1.0]], -1e5, 2.0),   # flat beam labelled unstable and inaccurate
 ])
+@pytest.mark.slow
 def test_flat_beam_on_an_obstacle_at_gap_zero_under_a_load_with_unloaded_ends(table, q,
                                                                                fraction):
     """P4 at gap 0 under a load table that vanishes on [0, 0.3] and [0.7, 1]: the
@@ -434,7 +436,7 @@ CURVE_MISSES = [
         "P2", {}, {"q": [[0.0, -13709.236722265015], [0.8592463806945426, -183561.32639273469],
                          [1.0, -48128.51782721932]], "axial": 12506666473.86398},
         {"gap": 0.0005114722483966589, "gap_above": 0.0020167654471801616}, 12,
-        [-147447.581098], id="P2-channel-variant", marks=pytest.mark.slow),
+        [-147447.581098], id="P2-channel-variant", marks=pytest.mark.heavy),
     pytest.param(   # P1, table load, in a 1.8 cm channel: three stable equilibria on one wall
         "P1", {"length": 1.3156629065792407, "nu": 0.2566669171897021,
                "half_thickness": 0.14877741699091868},
@@ -442,24 +444,25 @@ CURVE_MISSES = [
                [1.3156629065792407, -5832819.404762596]], "axial": 24844874791.174957},
         {"gap": 0.0741224852962095, "gap_above": 0.017667984498182614}, 12,
         [-10313931.4379, -10313608.4095, -10310878.2724], id="P1-channel-valley",
-        marks=pytest.mark.slow),
+        marks=pytest.mark.heavy),
     pytest.param(   # P2, point loads, 2 mm channel: two minima 0.03 S apart on one floor
         "P2", {}, {"points": [[0.2650736766007938, -141690.3637386594],
                               [0.07605017265531924, -550571.6779293197]],
                    "axial": 12087146972.309824},
         {"gap": 0.008736285049580158, "gap_above": 0.002057260007742304}, 24,
-        [-2628728.18814, -2628724.16726], id="P2-channel-pair", marks=pytest.mark.slow),
+        [-2628728.18814, -2628724.16726], id="P2-channel-pair", marks=pytest.mark.heavy),
     pytest.param(   # P1, point loads, 1 cm channel: a pair 0.1 S apart next to the line
         # s = 0, whose neighbour line 0.002 S away hid it from the refinement
         "P1", {}, {"points": [[0.6155846757476983, -5150658.721119596],
                               [0.8057555623890161, -6834354.998981968]],
                    "axial": 15855215010.430601},
         {"gap": 0.01949474682276539, "gap_above": 0.0104996072417108}, 16,
-        [-3736034.02854], id="P1-channel-beside-zero", marks=pytest.mark.slow),
+        [-3736034.02854], id="P1-channel-beside-zero", marks=pytest.mark.heavy),
 ]
 
 
 @pytest.mark.parametrize("load, obstacle, elements, missed", TRIAL_MISSES)
+@pytest.mark.slow
 def test_two_modes_on_an_obstacle_list_the_trials_stable_equilibria(load, obstacle, elements,
                                                                     missed):
     """Every listed equilibrium passes the independent check, and the stable
@@ -516,6 +519,7 @@ def test_one_mode_in_a_channel_of_1e_8_m_calls_no_failed_slice_an_edge():
             assert not c["violations"] and c["kkt"], c
 
 
+@pytest.mark.slow
 def test_one_mode_flat_beam_at_gap_zero_in_a_channel_is_optimal():
     """The flat beam pressed onto a gap-0 floor with a ceiling 1 cm above: its edge
     lies at the linear program's interval end, which is widened by RANGE_PAD; a
@@ -571,6 +575,7 @@ def test_a_beam_pressed_flat_with_round_off_slopes_is_listed_once():
     assert [(e.stable, e.status) for e in eqs] == [(True, "optimal")]
 
 
+@pytest.mark.slow
 def test_a_beam_lifted_by_a_fraction_of_a_load_table_is_polished():
     """A random campaign (seed 8801, draw 147): P4 resting in a channel at gap 0 under a
     load table that pulls up only around x = 0.8, 32 elements.  The stable beam
@@ -594,6 +599,7 @@ def test_a_beam_lifted_by_a_fraction_of_a_load_table_is_polished():
     assert 1e-13 < float(np.max(np.abs(eqs[1].w))) < 1e-11
 
 
+@pytest.mark.slow
 def test_one_mode_bounds_where_slices_fail_inside_the_range(caplog, monkeypatch):
     """A P4 beam in a channel 3.8e-6 m high (extreme-scale campaign): the slices
     fail over most of the admissible range (s from -2.72 to -0.34, and from 9.2e-4
@@ -639,6 +645,7 @@ def test_one_mode_bounds_where_slices_fail_inside_the_range(caplog, monkeypatch)
             assert not c["violations"] and c["kkt"], c
 
 
+@pytest.mark.slow
 def test_one_mode_finds_the_beam_held_at_a_ceiling_within_a_grid_step():
     """A P3 beam, 8 mm long, in a channel 1.8e-5 m high (extreme-scale campaign, 48
     elements): the stable beam held at the ceiling (-0.1021922969 J by an
@@ -680,7 +687,7 @@ def test_one_mode_classified_from_probes_closer_than_the_next_zero():
     assert [e.stable for e in eqs] == [True, True, False]
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 def test_two_modes_pressed_flat_at_gap_zero_is_no_traceback():
     """P4 at gap 0, two modes: the Newton step from the flat beam took F = inf
     beyond the obstacle's edge for a slope (a step of 6e11, a singular KKT
@@ -702,7 +709,7 @@ def test_two_modes_pressed_flat_at_gap_zero_is_no_traceback():
     np.testing.assert_allclose(a.w, b.w[::-1], atol=1e-9 * np.max(np.abs(a.w)))
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 def test_two_modes_in_a_narrow_channel_dense_and_fast_agree():
     """A 2 mm channel, no load, two modes: the dense programs' grid spanned the whole
     proven square (313 here, against an admissible range of 5-7), and a review found
@@ -727,6 +734,7 @@ def test_two_modes_in_a_narrow_channel_dense_and_fast_agree():
         assert abs(f.energy - e.energy) <= 1e-8 * abs(e.energy)
 
 
+@pytest.mark.slow
 def test_two_modes_no_duplicate_from_a_line_nearly_of_symmetry():
     """A helper's campaign: P1 (2 cm) under an asymmetric load table at gap 0, two
     modes.  The line s2 = 0 was taken for one of symmetry (dF/ds2 tiny on it) and
@@ -756,7 +764,7 @@ _BEAM = {"model": "gao", "length": 1.0, "E": 2.1e11, "nu": 0.3, "half_thickness"
          "width": 1.0}
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 @pytest.mark.parametrize("data, stable", [
     # two modes, no load, gap 0: w = 0 (an unstable KKT point) was missing
     ({"beam": {**_BEAM, "supports": "P4"}, "load": {"axial": 7606332094.006402},
@@ -814,7 +822,7 @@ def test_flat_beam_at_gap_zero_is_listed_exactly(data, stable):
     assert flat[0].status == "optimal" and flat[0].stable == stable
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 def test_two_modes_minima_beside_a_saddle_in_a_channel():
     """A review's independent multi-start: P1 in a channel under a symmetric load
     table (10 elements, two modes) has a strict mirror pair of minima at
@@ -838,7 +846,7 @@ def test_two_modes_minima_beside_a_saddle_in_a_channel():
     assert all(e.status == "optimal" for e in eqs)
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 def test_two_modes_minimum_in_a_narrow_strip_beside_a_saddle():
     """A review's independent multi-start: P1 in a channel under two point forces
     (16 elements, two modes) has a strict minimum at -14305.438 J (stationarity
@@ -898,10 +906,10 @@ _P3_CHANNEL = {
 
 
 @pytest.mark.parametrize("case", [
-    pytest.param("no load", marks=pytest.mark.slow),
-    pytest.param("up", marks=pytest.mark.slow),
-    pytest.param("down", marks=pytest.mark.slow),
-    pytest.param("table", marks=pytest.mark.slow),
+    pytest.param("no load", marks=pytest.mark.heavy),
+    pytest.param("up", marks=pytest.mark.heavy),
+    pytest.param("down", marks=pytest.mark.heavy),
+    pytest.param("table", marks=pytest.mark.heavy),
 ])
 def test_cantilever_in_a_gap_zero_channel_lists_its_global_minimiser(case):
     """A campaign's: P3 in a channel at gap 0, two modes.  The certified global
@@ -944,7 +952,7 @@ def test_one_mode_zero_beside_the_flat_beam_is_the_flat_beam():
     assert len(flat) == 1 and np.all(flat[0].w == 0.0) and flat[0].status == "optimal"
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 def test_two_modes_minimum_on_a_kink_of_f_is_stable():
     """A campaign's: P3 in a channel at gap 0, no load, two modes (10 elements).  A
     strict minimum at -1529.192816 J (independently second-order sufficient,
@@ -984,7 +992,7 @@ def _table_at_ceiling():
     return eqs
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 def test_two_modes_minimum_whose_probes_reach_past_a_saddle_is_stable():
     """A campaign's: P3 held at a channel's ceiling (gap 0 below, 0.34 mm above)
     under a load table, two modes (10 elements).  A strict minimum at
@@ -996,6 +1004,7 @@ def test_two_modes_minimum_whose_probes_reach_past_a_saddle_is_stable():
     assert len(found) == 1 and found[0].stable
 
 
+@pytest.mark.slow
 def test_a_row_of_minima_along_a_ceiling_is_searched_again_on_a_finer_grid():
     """The same scene: along the ceiling lie a row of minima (one for each node
     that touches it) within a grid step of each other.  The independent
@@ -1007,7 +1016,7 @@ def test_a_row_of_minima_along_a_ceiling_is_searched_again_on_a_finer_grid():
     assert len(found) == 1 and found[0].stable and found[0].status == "optimal"
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 def test_a_row_of_minima_in_an_unloaded_channel_is_searched_again():
     """A campaign's: P3 in a channel 2.5 mm high at gap 0, no load, two modes, 16
     elements.  Along the ceiling a row of three minima and two saddles within one
@@ -1027,7 +1036,7 @@ def test_a_row_of_minima_in_an_unloaded_channel_is_searched_again():
     assert len(found) == 1 and found[0].stable and found[0].status == "optimal"
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 def test_equilibria_closer_than_the_merging_distance_are_searched_in_their_own_square():
     """A campaign's: P1 on an obstacle 8.4e-6 m below, no load, two modes (10
     elements; S = 2.72).  Near the flat beam (|s| = 2.4e-5 S) lie a saddle on the
@@ -1084,7 +1093,7 @@ def test_the_checks_local_search_stays_local():
         assert got == lower
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 def test_one_mode_flat_beam_in_a_narrow_basin_is_stable():
     """A campaign's (`_PRESSED_FLAT`): w = 0 is a strict local minimum with a basin
     1e-5 S wide; listed stable, and so checked independently."""
@@ -1096,7 +1105,7 @@ def test_one_mode_flat_beam_in_a_narrow_basin_is_stable():
     assert len(flat) == 1 and flat[0].stable and flat[0].status == "optimal"
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 def test_the_check_confirms_a_descent_from_a_point_within_the_feasibility_tolerance():
     """A campaign's P3 beam on an obstacle at gap 0 under a uniform load (two modes,
     10 elements): an unstable equilibrium at 4543.04 J lies 4.5e-11 of its size
@@ -1176,7 +1185,7 @@ def test_twins_of_mirror_images_are_settled_dropped_or_kept():
     assert got[1] is out[1] and len(got) == 8
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 def test_saddles_near_the_flat_beam_are_listed_with_their_mirror_images():
     """Campaign scene z7601k2:20, P1 pressed at gap 0 under a uniform load, two modes,
     8 elements (about 20 s): near the flat beam two saddles at 6.34 J (2e-5 m of
@@ -1207,7 +1216,7 @@ def _pairs_near_flat(eqs, count):
         assert sum(np.allclose(o.w, e.w[::-1], rtol=0, atol=tol) for o in near) == 1
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 def test_a_mirror_image_the_first_slice_solve_fails_is_listed():
     """A helper's campaign (seed 9301): P4 pressed at gap 0 under a uniform load, two
     modes, 12 elements (about 30 s).  A saddle 2e-5 m deep (1.2608 J) was listed
@@ -1261,7 +1270,7 @@ def test_missing_mirror_images_are_completed_where_settled():
     assert len(tried) == 3   # a, d and f: b's and c's images are listed, 0 and the failed slice have none
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 def test_an_inaccurate_mirror_twin_near_the_flat_beam_is_settled():
     """A campaign's P1 beam at gap 0 under a uniform load (two modes, 16
     elements): near the flat beam a saddle pair at 4.70503104 J, one listed

@@ -141,6 +141,7 @@ def test_cli_equilibria_and_path(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("q", [None, -5e7])
+@pytest.mark.slow
 def test_two_unstable_modes(q):
     """P1 above its second mode load: each equilibrium found is one (independent gradient
     and Hessian), the lowest is the independent multi-start's minimum."""
@@ -158,6 +159,7 @@ def test_two_unstable_modes(q):
 @pytest.mark.parametrize("supports, axial", [
     ("P1", 1.2e10), ("P2", 9e9), ("P3", 4e9), ("P4", 6e9),   # between lambda_2 and lambda_3
 ])
+@pytest.mark.slow
 def test_two_unstable_modes_without_load_include_the_flat_beam(supports, axial):
     """q = 0, k = 2: w = 0 is an equilibrium (the energy's gradient vanishes there
     exactly) and unstable (P > lambda_1); the energy is even in w, so the mirror
@@ -287,6 +289,7 @@ _THESIS_BEAM = {"model": "gao", "length": 1.0, "E": 2.1e11, "nu": 0.3, "half_thi
     {"beam": {**_THESIS_BEAM, "supports": "P2"}, "load": {"axial": 11940643521.27065},
      "mesh": {"elements": 16}, "obstacle": {"gap": 0.0}},
 ])
+@pytest.mark.slow
 def test_two_modes_flat_beam_at_gap_zero_without_load_is_unstable(data):
     """A campaign against an independent energy: with two modes the flat beam on a
     bed or obstacle at gap 0 was called stable (`optimal` on the bed; a path
@@ -425,6 +428,7 @@ def _stationary_in_its_own_scale(scene, e, size=None):
     assert out["touching"] >= 1
 
 
+@pytest.mark.slow
 def test_a_saddle_too_low_for_the_scenes_slices_is_found_in_the_flat_beams_own_scale():
     """A helper's campaign (seed 7102, draw 30): P2 pressed at gap 0 by 3.7e5 N/m,
     two modes, 9 elements.  The buckled beam (-4.1e8 J) and the flat one were
@@ -450,7 +454,7 @@ def test_a_saddle_too_low_for_the_scenes_slices_is_found_in_the_flat_beams_own_s
         _stationary_in_its_own_scale(scene, saddle)
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 def test_near_flat_saddles_on_a_finer_mesh_are_listed_once():
     """The seed-9501 scene on 30 elements (a review): the whole-beam polish, solving
     its bordered systems by least squares with unscaled rows, left the touching
@@ -474,6 +478,7 @@ def test_near_flat_saddles_on_a_finer_mesh_are_listed_once():
     _checked(scene, eqs)
 
 
+@pytest.mark.slow
 def test_a_flat_beam_pressed_by_a_tiny_load_is_a_stable_equilibrium():
     """A review: the seed-7102 scene (P2 at gap 0, two modes, 9 elements) pressed by
     10 N/m (here) or 1e-3 N/m listed the flat beam unstable and `optimal`; independently
@@ -490,7 +495,7 @@ def test_a_flat_beam_pressed_by_a_tiny_load_is_a_stable_equilibrium():
     _checked(scene, eqs)
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 def test_near_flat_saddles_of_a_degenerate_contact_are_listed_once():
     """A review: P1 pressed at gap 0 by 2e6 N/m at three times P_bar_h, 12 elements.
     The search in the flat beam's own scale listed one saddle three times -- twice
@@ -581,6 +586,7 @@ def test_every_equilibrium_of_a_symmetric_scene_is_listed_with_its_mirror_image(
 
 
 @pytest.mark.parametrize("bed", [False, True])
+@pytest.mark.slow
 def test_at_the_limit_without_load_no_unstable_list_is_optimal(bed):
     """At P_bar_h (to 1e-12) without load the flat beam is a quartic minimum and the
     probes' F' is round-off: w = 0 was listed alone, unstable and `optimal`
@@ -599,6 +605,7 @@ def test_at_the_limit_without_load_no_unstable_list_is_optimal(bed):
 
 
 @pytest.mark.parametrize("elements", [2, 8])
+@pytest.mark.slow
 def test_a_beam_pressed_a_nanometre_into_a_stiff_bed_is_a_stable_minimum(elements):
     # P4 at 1.001 lambda_2 (two modes) under -100 N/m on a unilateral bed at gap 0
     # (k_F = 1e3 EI / L^4): the beam sinks 1.5e-9 m into it, far below the reduced
