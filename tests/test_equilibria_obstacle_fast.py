@@ -160,7 +160,7 @@ def test_energies_converge_with_the_mesh_on_the_fast_path():
     assert 3.7 < order < 4.3, (order, diffs)
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 def test_two_unstable_modes_with_an_obstacle():
     """k = 2 (P1 above its second mode load, q = -5e7 N/m, an obstacle 1 cm below):
     every equilibrium the plane search lists on the contact slices is one of the
