@@ -905,12 +905,8 @@ _P3_CHANNEL = {
 }
 
 
-@pytest.mark.parametrize("case", [
-    pytest.param("no load", marks=pytest.mark.heavy),
-    pytest.param("up", marks=pytest.mark.heavy),
-    pytest.param("down", marks=pytest.mark.heavy),
-    pytest.param("table", marks=pytest.mark.heavy),
-])
+@pytest.mark.heavy
+@pytest.mark.parametrize("case", ["no load", "up", "down", "table"])
 def test_cantilever_in_a_gap_zero_channel_lists_its_global_minimiser(case):
     """A campaign's: P3 in a channel at gap 0, two modes.  The certified global
     minimiser (on the floor by the clamp, at the ceiling at the free end;
@@ -992,7 +988,7 @@ def _table_at_ceiling():
     return eqs
 
 
-@pytest.mark.heavy
+@pytest.mark.slow     # (its scene is the next test's, cached: no cost of its own in CI)
 def test_two_modes_minimum_whose_probes_reach_past_a_saddle_is_stable():
     """A campaign's: P3 held at a channel's ceiling (gap 0 below, 0.34 mm above)
     under a load table, two modes (10 elements).  A strict minimum at
