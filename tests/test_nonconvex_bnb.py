@@ -119,3 +119,44 @@ def test_a_basin_whose_bound_would_not_close_its_boxes_is_not_used():
                            start=(energy(np.array([0.7])), np.array([0.7]), np.array([0.7]), None))
     assert out.converged and 0.0 <= out.gap <= 1e-8 and abs(out.upper + 0.25) <= 1e-12
     assert out.basins == []
+
+
+class Noisy(Toy):
+    """Node bounds 1e-3 below the box's minimum, always: the gap cannot fall below
+    1e-3, and splitting the boxes near the minima does not halve it (a stalled gap)."""
+
+    def solve_box(self, lo, hi):
+        sol = super().solve_box(lo, hi)
+        sol.lower -= 1e-3
+        return sol
+
+
+def test_a_stalled_gap_asks_the_caller_and_ends_only_when_told():
+    """``stalled`` is asked only after the gap stopped halving (bnb.STALL_NODES node
+    programs), with the best beam; True ends the search uncertified, its bounds
+    still valid; False leaves the search as it was without the argument."""
+    from gaocvx.nonconvex import bnb
+
+    asked = []
+
+    def stop(u):
+        asked.append(np.array(u))
+        return True
+
+    def go_on(u):
+        asked.append(np.array(u))
+        return False
+
+    plain = branch_and_bound(Noisy(), energy, [-2.0], [2.0], tol=1e-6)
+    assert plain.nodes > 2 * bnb.STALL_NODES   # (else this test would test nothing)
+    ended = branch_and_bound(Noisy(), energy, [-2.0], [2.0], tol=1e-6, stalled=stop)
+    assert not ended.converged and len(asked) == 1
+    assert bnb.STALL_NODES <= ended.nodes < plain.nodes
+    assert abs(abs(asked[0][0]) - 1 / math.sqrt(2)) <= 1e-3   # the best beam
+    assert ended.lower <= -0.25 <= ended.upper + 1e-12        # the bound still holds
+    asked.clear()
+    kept = branch_and_bound(Noisy(), energy, [-2.0], [2.0], tol=1e-6, stalled=go_on)
+    assert len(asked) >= 1 and kept.nodes == plain.nodes and kept.lower == plain.lower
+    asked.clear()
+    exact = branch_and_bound(Toy(), energy, [-2.0], [2.0], tol=1e-6, stalled=stop)
+    assert exact.converged and not asked

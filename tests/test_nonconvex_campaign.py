@@ -20,6 +20,7 @@ the refusal of more than five), and campaigned in docs/nonconvex-campaign.md.
 """
 
 import json
+import logging
 
 import numpy as np
 import pytest
@@ -339,6 +340,28 @@ def test_channel_near_the_limit_re_solved_in_its_own_scale():
     assert not rec["violations"], rec["violations"]
     assert rec["status"] == "optimal", rec.get("message")
     assert rec["nodes"] < 1000, rec["nodes"]   # it stopped at 2569 (the 120 s clock)
+
+
+@pytest.mark.slow
+def test_a_stalled_gap_far_from_the_answers_scale_goes_to_its_own_scale_early(caplog):
+    """Campaign scene 131:39 (P3, 1 + 2.3e-5 times the limit, an obstacle 5.3e-5 m
+    below, 24 elements): the answer is 20 times the first search's unit, where the
+    gap stood at 6.1e-7 of the scale from node 201 on, and the search ran to its
+    120 s limit (2617 node programs) before the re-solve in the answer's own scale
+    certified it (854 more).  The stalled search now ends after bnb.STALL_NODES
+    node programs without progress, the re-solve going on from its leaves; the
+    independent multi-start checks the answer (-308.5874738 J)."""
+    import re
+    caplog.set_level(logging.INFO, logger="gaocvx.nonconvex")
+    case = random_scene(np.random.default_rng([131, 39]))
+    assert case.data["beam"]["supports"] == "P3" and "obstacle" in case.data
+    rec = run_case(case, starts=12, seed=39)
+    assert not rec["violations"], rec["violations"]
+    assert rec["status"] == "optimal", rec.get("message")
+    searches = [int(m.group(1)) for r in caplog.records
+                if (m := re.search(r"branch and bound: (\d+) nodes, upper", r.getMessage()))]
+    assert len(searches) == 2 and any("stalled" in r.getMessage() for r in caplog.records)
+    assert sum(searches) < 1500, searches
 
 
 def test_a_channel_far_narrower_than_the_free_buckle_is_searched_in_its_own_units():

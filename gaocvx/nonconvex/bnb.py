@@ -56,6 +56,10 @@ log = logging.getLogger(__name__)
 # Seconds of branch and bound before it stops, uncertified (the answer is then
 # `inaccurate` with the gap reached).
 TIME_LIMIT = 120.0
+# Node programs without the gap halving after which the caller's ``stalled`` is asked
+# whether to end the search (the global method: when the answer lies far outside
+# the problem's scale, so that a re-solve in its own scale follows).
+STALL_NODES = 400
 # Basins (the ``basin`` argument): tried at most MAX_BASINS times, on node answers
 # within NEAR times the accepted gap of the best energy that lie outside every
 # basin found and the points that polished to it.
@@ -106,7 +110,7 @@ class BnBResult:
 
 def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
                      start=None, leaves=None, time_limit: float = TIME_LIMIT,
-                     accept: float | None = None, basin=None) -> BnBResult:
+                     accept: float | None = None, basin=None, stalled=None) -> BnBResult:
     """Minimise the energy over the box ``[lo, hi]`` of amplitudes, to a certified gap ``tol``.
 
     Parameters
@@ -147,6 +151,10 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
         that lie outside every basin found and the points that polished to it
         (at most ``MAX_BASINS`` tries); a box inside a basin takes the basin's
         bound without a node program.
+    stalled : callable, optional
+        ``stalled(u) -> bool`` of the best deflection, asked when the gap has not
+        halved over ``STALL_NODES`` node programs: true ends the search
+        (``converged = False``; its leaves are the caller's to go on from).
     """
     c = np.asarray(prog.modes.c, float)
     # A wall-clock limit: with constraints each node is a solve of its own, and a
@@ -231,6 +239,7 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
                 open_.append((leaf.lower, next(counter), leaf))
         heapq.heapify(open_)
     converged, next_log = True, 100
+    mark = (math.inf, nodes)   # (the gap last halved, at so many nodes)
     while open_:
         lower, _, leaf = open_[0]
         if best[0] - lower <= tol:
@@ -238,6 +247,14 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
         if nodes >= max_nodes or time.perf_counter() > deadline:
             converged = False
             break
+        if best[0] - lower <= 0.5 * mark[0]:
+            mark = (best[0] - lower, nodes)
+        elif nodes - mark[1] >= STALL_NODES and stalled is not None and best[1] is not None:
+            if stalled(best[1]):
+                log.info("branch and bound: %d nodes, gap %.3g, stalled", nodes, best[0] - lower)
+                converged = False
+                break
+            mark = (mark[0], nodes)
         if nodes >= next_log:   # (nodes go up by two a split: no test of nodes % 100)
             log.info("branch and bound: %d nodes, gap %.3g", nodes, best[0] - lower)
             next_log += 100
