@@ -150,13 +150,14 @@ def test_a_stalled_gap_asks_the_caller_and_ends_only_when_told():
     plain = branch_and_bound(Noisy(), energy, [-2.0], [2.0], tol=1e-6)
     assert plain.nodes > 2 * bnb.STALL_NODES   # (else this test would test nothing)
     ended = branch_and_bound(Noisy(), energy, [-2.0], [2.0], tol=1e-6, stalled=stop)
-    assert not ended.converged and len(asked) == 1
+    assert not ended.converged and ended.stalled and len(asked) == 1
     assert bnb.STALL_NODES <= ended.nodes < plain.nodes
     assert abs(abs(asked[0][0]) - 1 / math.sqrt(2)) <= 1e-3   # the best beam
     assert ended.lower <= -0.25 <= ended.upper + 1e-12        # the bound still holds
     asked.clear()
     kept = branch_and_bound(Noisy(), energy, [-2.0], [2.0], tol=1e-6, stalled=go_on)
     assert len(asked) >= 1 and kept.nodes == plain.nodes and kept.lower == plain.lower
+    assert not kept.stalled and not plain.stalled
     asked.clear()
     exact = branch_and_bound(Toy(), energy, [-2.0], [2.0], tol=1e-6, stalled=stop)
     assert exact.converged and not asked

@@ -446,3 +446,34 @@ def test_a_polished_point_that_fails_its_certificate_gives_way_to_the_search_s_b
     assert not rec["violations"], rec["violations"]
     assert rec["status"] == "optimal", rec.get("message")
     assert rec["energy"] <= rec["gap"], (rec["energy"], rec["gap"])
+
+
+def test_a_search_stopped_as_stalled_whose_answer_is_within_its_units_goes_on(
+        monkeypatch, caplog):
+    """Where the first search ends as stalled but its polished answer lies within
+    the units after all, no re-solve in another scale follows: the search goes on
+    in the same units from its leaves (else the answer would stay uncertified).
+    Forced here: the stall asked after two node programs and always answered yes,
+    on a P4 beam above an obstacle whose answer is within its units."""
+    from gaocvx.nonconvex import bnb, minimum
+    scene = Scene.from_dict({
+        "beam": {"model": "gao", "supports": "P4", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                 "half_thickness": 0.1, "width": 1.0},
+        "load": {"q": -1e7, "axial": 1.3e9}, "mesh": {"elements": 16},
+        "obstacle": {"gap": 0.01}})
+    plain = solve(scene, "global")
+    real = minimum.branch_and_bound
+
+    def forced(*args, stalled=None, **kw):
+        return real(*args, stalled=None if stalled is None else (lambda u: True), **kw)
+
+    monkeypatch.setattr(minimum, "branch_and_bound", forced)
+    monkeypatch.setattr(bnb, "STALL_NODES", 2)
+    caplog.set_level(logging.INFO, logger="gaocvx.nonconvex")
+    r = solve(scene, "global")
+    messages = [rec.getMessage() for rec in caplog.records]
+    assert any("stalled" in m for m in messages)
+    assert any("goes on in the same units" in m for m in messages)
+    assert plain.status == r.status == "optimal", r.message
+    gaps = abs(plain.extra["global"]["bound_gap"]) + abs(r.extra["global"]["bound_gap"])
+    assert abs(r.energy - plain.energy) <= gaps + 1e-12 * abs(plain.energy)

@@ -88,7 +88,8 @@ class BnBResult:
     the smallest lower bound of any leaf, ``gap = upper - lower`` the
     certificate; ``leaves`` are the final boxes, ``nodes`` the node programs
     solved, ``failed`` those the solver did not report optimal among the leaves,
-    ``basins`` the boxes proved around local minimisers (each holds one).
+    ``basins`` the boxes proved around local minimisers (each holds one);
+    ``stalled`` whether the caller's ``stalled`` ended the search.
     """
 
     upper: float
@@ -102,6 +103,7 @@ class BnBResult:
     failed: int = 0
     certificate: str = "branch and bound"   # (dual.shortcut's: "dual bound", no nodes)
     basins: list = field(default_factory=list, repr=False)   # proved (see ``basin``)
+    stalled: bool = False
 
     @property
     def gap(self) -> float:
@@ -238,7 +240,7 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
             else:
                 open_.append((leaf.lower, next(counter), leaf))
         heapq.heapify(open_)
-    converged, next_log = True, 100
+    converged, stalled_out, next_log = True, False, 100
     mark = (math.inf, nodes)   # (the gap last halved, at so many nodes)
     while open_:
         lower, _, leaf = open_[0]
@@ -252,7 +254,7 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
         elif nodes - mark[1] >= STALL_NODES and stalled is not None and best[1] is not None:
             if stalled(best[1]):
                 log.info("branch and bound: %d nodes, gap %.3g, stalled", nodes, best[0] - lower)
-                converged = False
+                converged, stalled_out = False, True
                 break
             mark = (mark[0], nodes)
         if nodes >= next_log:   # (nodes go up by two a split: no test of nodes % 100)
@@ -292,7 +294,7 @@ def branch_and_bound(prog, energy, lo, hi, tol: float, max_nodes: int = 4000,
     log.info("branch and bound: %d nodes, upper %.12g, lower %.12g, %d leaves", nodes, best[0],
              lower, len(leaves))
     return BnBResult(best[0], lower, best[1], best[2], best[3], nodes, leaves,
-                     converged, failed, basins=basins)
+                     converged, failed, basins=basins, stalled=stalled_out)
 
 
 def _carve(leaf: Leaf, basins, c):

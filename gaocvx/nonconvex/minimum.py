@@ -265,10 +265,17 @@ def solve_global(dp, modes=None, max_nodes: int | None = None,
     for attempt in range(2):
         raw, info, size, out = _run(dp, modes, max_nodes, t0, fast, prior,
                                     stalled=None if attempt else off_scale)
-        if attempt or low <= size <= 10.0 or not math.isfinite(size) or size == 0:
+        in_scale = low <= size <= 10.0 or not math.isfinite(size) or size == 0
+        if attempt or (in_scale and not out.stalled):
             break
-        log.info("global: re-solving in the answer's own scale (size %.3g W)", size)
-        dp = dp.rescaled(dp.W * size)
+        if in_scale:
+            # Stopped as stalled, but the polished answer lies within the units after
+            # all: the search goes on in them, from its leaves, as it would have.
+            log.info("global: the stalled search goes on in the same units")
+            size = 1.0
+        else:
+            log.info("global: re-solving in the answer's own scale (size %.3g W)", size)
+            dp = dp.rescaled(dp.W * size)
         # The search goes on from the first one's leaves (in the new units: lengths
         # over W grow by 1/size, energies by 1/size^2, multipliers by 1/size).
         r = 1.0 / size
