@@ -253,19 +253,22 @@ def solve_global(dp, modes=None, max_nodes: int | None = None,
     # displacement of 4.6e-6 of itself along its mode (a helper's probe)
     low = 0.1 if MixedForm(dp).has_load else 1.0
 
+    def in_units(size):
+        # (no size of its own, zero or not finite: no other scale to go to)
+        return not (math.isfinite(size) and size > 0.0) or low <= size <= 10.0
+
     def off_scale(u):
         # The search's best beam lies outside [low, 10] W (its largest nodal |w|), so a
         # re-solve in its own scale follows: a stalled gap need not wait for the time
         # limit.  (P3 on an obstacle just above the limit, 24 elements, the answer 20 W:
         # the gap stood at 6.1e-7 of the scale from node 201 to the limit at 2617, 118
         # s; the re-solve certified it in 17 s -- a campaign's scene 131:39.)
-        size = float(np.max(np.abs(dp.full(u)[0::2]), initial=0.0))
-        return size > 0.0 and not low <= size <= 10.0
+        return not in_units(float(np.max(np.abs(dp.full(u)[0::2]), initial=0.0)))
 
     for attempt in range(2):
         raw, info, size, out = _run(dp, modes, max_nodes, t0, fast, prior,
                                     stalled=None if attempt else off_scale)
-        in_scale = low <= size <= 10.0 or not math.isfinite(size) or size == 0
+        in_scale = in_units(size)
         if attempt or (in_scale and not out.stalled):
             break
         if in_scale:
