@@ -4,7 +4,7 @@
                                             [--shor 40] [--output docs/nonconvex-campaign.md]
                                             [--json records.json] [--elements 48,64|48-128]
                                             [--first 0] [--solve-limit 0] [--slsqp-iter 0]
-                                            [--modes 4,5]
+                                            [--modes 4,5] [--trust-constr]
 
 Every scene of tests/nonconvex_campaign_support.py's generator (``count`` from
 ``seed``) is solved by ``solve(scene, "global")`` and checked by the rules of
@@ -313,6 +313,9 @@ def main(argv=None):
                     help="stop a global solve after this many seconds (0: never)")
     ap.add_argument("--slsqp-iter", type=int, default=0,
                     help="cap the checker's SLSQP iterations (obstacles; default its 400)")
+    ap.add_argument("--trust-constr", action="store_true",
+                    help="search again by trust-constr where the checker's SLSQP ends "
+                         "inadmissible (channels with four or five modes; slower)")
     ap.add_argument("--first", type=int, default=0, help="index of the first scene")
     ap.add_argument("--modes", default=None,
                     help='unstable mode counts to set the axial force for, e.g. "4,5"')
@@ -328,6 +331,9 @@ def main(argv=None):
     if args.slsqp_iter:
         from nonconvex_independent import Discrete
         Discrete.SLSQP_ITER = args.slsqp_iter
+    if args.trust_constr:
+        from nonconvex_independent import Discrete
+        Discrete.TRUST_CONSTR = True
     modes = [int(k) for k in args.modes.split(",")] if args.modes else None
     records = run(args.seed, args.count, args.starts, elements, args.first,
                   dump=args.json.with_suffix(".partial.json") if args.json else None,

@@ -283,7 +283,7 @@ def run_case(case: Case, starts: int = 24, seed: int = 0) -> dict:
     for x0 in pts:
         xm, fm, _ = en.local_min(x0)
         R, rr = en.constraints()
-        if len(rr) and np.min(R @ xm - rr) < -1e-10 * max(1.0, float(np.max(np.abs(xm)))):
+        if len(rr) and np.min(R @ xm - rr) < -en.ADMISSIBLE * max(1.0, float(np.max(np.abs(xm)))):
             continue  # an inadmissible end point is no evidence
         found.append((fm * en.E0, xm))
     rec["search_s"] = time.perf_counter() - t1

@@ -161,3 +161,29 @@ def test_kkt_of_a_local_minimiser_at_256_elements():
     # 1.5e-9 here and 6e-8 at 512 elements
     assert m["stationarity"] <= 1e-10, m
     assert m["lowest"] > 0, m
+
+
+@pytest.mark.slow
+def test_local_search_in_a_channel_with_five_modes_ends_admissible():
+    # Campaign scene 133:18 (P4 in a channel, k = 5, 8 elements): every SLSQP end
+    # point lay 2e-7..8e-5 outside the rows, so the campaign's rule "nothing below
+    # the certified bound" was not tested there.  With the trust-constr fallback each
+    # end point must be admissible and a KKT point of the independent energy.
+    scene = Scene.from_dict({
+        "beam": {"model": "gao", "supports": "P4", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                 "half_thickness": 0.1, "width": 1.0},
+        "load": {"q": -102638.60831335466, "axial": 32839537082.712437},
+        "mesh": {"elements": 8},
+        "obstacle": {"gap": 0.014703805503170509, "gap_above": 0.008768096810916714}})
+    en = Discrete(scene, W=0.01)
+    assert en.unstable_modes() == 5
+    R, r = en.constraints()
+    rng = np.random.default_rng(18)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for x0 in en.starts(rng, 6, 1.0):
+            x, e, _ = en.local_min(x0, trust_constr=True)
+            size = max(1.0, float(np.max(np.abs(x))))
+            assert np.min(R @ x - r) >= -en.ADMISSIBLE * size
+            assert e == pytest.approx(en.energy(x) / en.E0, rel=1e-12)
+            assert en.kkt(x)["stationarity"] <= 1e-6
