@@ -18,6 +18,12 @@ from .fast_check import RANGE_PAD
 __all__ = ["ContactSlices"]
 
 
+def _norm(v) -> float:
+    """``np.linalg.norm`` of a float vector, as numpy computes it (sqrt of its dot
+    product: the same bits), without its dispatch: four per Newton step."""
+    return math.sqrt(float(v.dot(v)))
+
+
 class ContactSlices:
     """The reduced function with a rigid obstacle (or channel) at any N: banded Newton on slices.
 
@@ -251,21 +257,22 @@ class ContactSlices:
         mf, B, k = self.mf, self.B, self.k
         al = {"shift": lam, "rho": rho}
         nu, previous, full = np.zeros(k), math.inf, False
+        zeros, target_size = np.zeros((mf.N, k)), 1.0 + _norm(target)
         for _ in range(max_iter):
             g, H = mf.gradient(z, **al), mf.hessian(z, **al)
+            link, Bz = mf.link(z), B @ z
             try:
                 # (inside: far outside the admissible amplitudes the factor itself
                 # can be singular -- a Newton step of 2e8 S in a trial's k = 2 search)
                 factor = mf.kkt_factor(H)
-                R, Rmu = factor.solve(np.column_stack([-g, B.T]),
-                                      np.column_stack([-mf.link(z), np.zeros((mf.N, k))]))
+                R, Rmu = factor.solve(np.column_stack([-g, B.T]), np.column_stack([-link, zeros]))
                 r0, X, m0, Xmu = R[:, 0], R[:, 1:], Rmu[:, 0], Rmu[:, 1:]
-                nu = np.linalg.solve(B @ X, B @ r0 - (target - B @ z))
+                nu = np.linalg.solve(B @ X, B @ r0 - (target - Bz))
             except np.linalg.LinAlgError:
                 return z, nu, False
             d, mu = r0 - X @ nu, m0 - Xmu @ nu
-            on_slice = (np.linalg.norm(B @ z - target) <= 1e-12 * (1.0 + np.linalg.norm(target))
-                        and np.linalg.norm(mf.link(z)) <= 1e-12 * (1.0 + np.linalg.norm(z)))
+            on_slice = (_norm(Bz - target) <= 1e-12 * target_size
+                        and _norm(link) <= 1e-12 * (1.0 + _norm(z)))
             if not on_slice:
                 z = z + d   # the constraints are linear: one full step lands on them
                 continue
