@@ -4,9 +4,11 @@
 per point) over the admissible amplitudes, refines each sign change and each
 close pair of zeros (:func:`.contours.sampled_roots`), locates the edges an
 obstacle puts to the amplitudes, proves that no zero is missing
-(:mod:`.completeness`), and labels each zero stable or unstable
-(:func:`classify`).  :func:`.stationary.equilibria` calls it and polishes what
-it finds; :mod:`.stationary2` is its counterpart for two modes.
+(:mod:`.completeness`), takes zeros between which F' is round-off for one
+(:func:`noise_clusters`), and labels each zero stable or unstable from probes
+where F' rises above its round-off (:func:`classify`, :func:`settled`).
+:func:`.stationary.equilibria` calls it and polishes what it finds;
+:mod:`.stationary2` is its counterpart for two modes.
 """
 
 from __future__ import annotations
@@ -22,8 +24,8 @@ from .completeness import proven_roots
 from .contours import sampled_roots
 from .equilibrium import Equilibrium, same_point
 
-__all__ = ["classify", "find_line", "ROOT_TOL", "RHO", "DERIVATIVE_TOL", "DENSE_DERIVATIVE_TOL",
-           "CONTACT_DERIVATIVE_TOL"]
+__all__ = ["classify", "find_line", "noise_clusters", "settled", "ROOT_TOL", "RHO",
+           "DERIVATIVE_TOL", "DENSE_DERIVATIVE_TOL", "CONTACT_DERIVATIVE_TOL", "NOISE"]
 
 log = logging.getLogger(__name__)
 
@@ -42,6 +44,13 @@ DENSE_DERIVATIVE_TOL = 1e-7
 # The contact slices accept violations of 1e-9 and their active sets kink F':
 # taken ten times looser than the smooth slices.
 CONTACT_DERIVATIVE_TOL = 1e-8
+# F' at an amplitude t is round-off where |F'(t)| |t| is within NOISE eps_mach
+# times the slice's own energy scale (the sum of |energy parts|): F' is a sum of
+# terms of about own / |t| that cancel.  Measured without load 1e-12 above
+# P_bar_h (aluminium P4, 16 elements): F''s scatter 1e-19 program units at
+# t = 4.4e-5, eps_mach own / |t| = 1e-19 there.
+NOISE = 10.0
+_EPS = float(np.finfo(float).eps)
 
 
 def classify(dF, r, h) -> tuple:
@@ -69,6 +78,36 @@ def classify(dF, r, h) -> tuple:
         return False, math.nan
     curvature = (right[1] - mid) / h if fr else (mid - left[1]) / h
     return bool(right[1] > 0 if fr else left[1] < 0), curvature
+
+
+def settled(dF, own, t) -> bool:
+    """Whether ``F'(t)`` rises above its round-off (:data:`NOISE`), or ``t`` is
+    inadmissible (``F = inf``: :func:`classify` takes that side as it is)."""
+    F, d, u = dF(t)[:3]
+    if not math.isfinite(F) or u is None:
+        return True
+    return abs(d) * abs(t) > NOISE * _EPS * own(u)
+
+
+def noise_clusters(roots, dF, own, points) -> list:
+    """``roots`` (sorted) in groups between which F' stays within round-off.
+
+    Neighbouring zeros are one where F' at every sampled amplitude between them
+    (``points``) and at their midpoint is round-off (:func:`settled`): the round-off
+    of F' makes sign changes, each refined to a zero of its own.  (Without load
+    1e-12 above P_bar_h, 13 zeros within 4e-4 of the buckled beam's amplitude, 12
+    of them labelled unstable by probes in the noise: an equilibria trial.)
+    """
+    groups = []
+    for r in roots:
+        if groups:
+            a = groups[-1][-1]
+            between = [t for t in points if a < t < r] + [0.5 * (a + r)]
+            if not any(settled(dF, own, t) for t in between):
+                groups[-1].append(r)
+                continue
+        groups.append([r])
+    return groups
 
 
 def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
@@ -252,9 +291,23 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
         status = "optimal" if ok and res <= ROOT_TOL and real else "inaccurate"
         out.append(Equilibrium(float(dp.energy(u) * dp.E0), True, [float(inside)], dp.x.copy(),
                                w, slope, float(res), status, float(dp.P), math.nan, float(dp.W)))
+
+    def own_of(u):   # the slice's energy scale (program units)
+        return sum(abs(v) for v in dp.energy_parts(u).values())
+
+    zeros = []   # (within 1e-9 S of an end or a zero before it: the same one)
     for r in sorted(set(roots)):
-        if any(abs(r - e) <= 1e-9 * S for e in [q.amplitudes[0] for q in out]):
-            continue
+        if not any(abs(r - e) <= 1e-9 * S for e in [q.amplitudes[0] for q in out] + zeros):
+            zeros.append(r)
+    # (zeros between which F' is round-off are one equilibrium: the one with the
+    # least |F'|, its probes beyond the others; wider than the proof's resolution,
+    # the proof no longer speaks for the others)
+    groups = noise_clusters(zeros, dF, own_of, sorted(cache))
+    reps = [min([r for r in g if dF(r)[2] is not None] or g, key=lambda r: abs(dF(r)[1]))
+            for g in groups]
+    if any(g[-1] - g[0] > RHO * S for g in groups):
+        complete = False
+    for r in reps:
         F, d0, u, ok = dF(r)
         if u is None:   # (a slice that failed inside the range: no beam to report)
             log.warning("equilibria: no admissible slice at the zero s = %.17g", r)
@@ -265,8 +318,20 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
         # probes 3e-6 S wide that straddled w = 0 -- an extreme-scale campaign)
         # (other zeros only, beyond the merging distance: an edge's probe beyond
         # it counts as rising anyway)
-        near = [abs(q - r) for q in set(roots) if abs(q - r) > 1e-9 * S]
+        near = [abs(q - r) for q in reps if abs(q - r) > 1e-9 * S]
         h = max(min([1e-6 * S] + [0.25 * q for q in near]), 1e-10 * S)
+        # Probes where F' is round-off label nothing: widened (within a quarter of
+        # the distance to the next zero or the range's end) until F' rises above
+        # it, else the label is not known.  (Without load 1e-12 above P_bar_h, F'
+        # 4 c h = 3e-20 at h = 1e-6 S, its round-off 1e-19: stable beams labelled
+        # unstable -- an equilibria trial.)
+        cap = min([0.25 * q for q in near] + [0.25 * (r - lo), 0.25 * (hi - r)])
+        while not (settled(dF, own_of, r - h) and settled(dF, own_of, r + h)) and 4 * h <= cap:
+            h *= 4.0
+        noisy = not (settled(dF, own_of, r - h) and settled(dF, own_of, r + h))
+        if noisy:
+            log.warning("equilibria: F' at the zero s = %.6g is round-off as far as the "
+                        "probes reach (%.3g); its stability is not known", r, h)
         stable, curvature = classify(dF, r, h)
         # (an inadmissible probe counts as rising only at an end of the range:
         # inside it the slice failed, and the stability is not known)
@@ -314,7 +379,8 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
                     res = min(res, abs((b if fb else a)[1]) * e / size)
                     stable = True
                     break
-        status = "optimal" if ok and res <= ROOT_TOL and not undecided else "inaccurate"
+        status = "optimal" if ok and res <= ROOT_TOL and not (undecided or noisy) else \
+            "inaccurate"
         out.append(Equilibrium(float(dp.energy(u) * dp.E0), bool(stable), [float(r)], dp.x.copy(),
                                w, slope, float(res), status, float(dp.P), float(curvature),
                                float(dp.W)))

@@ -1,0 +1,109 @@
+"""Equilibria within round-off of the convexity limit, without load.
+
+Within about 1e-12 of P_bar_h the reduced gradient F' of the buckling mode's
+amplitude is round-off over the buckled beams' neighbourhood: its sign changes
+there made a cluster of zeros, each listed as an equilibrium, and probes in the
+round-off labelled stable beams unstable (an equilibria trial: 13 copies of the
+buckled beam, 12 labelled unstable).  The reference here is the structure of
+the problem, not the code: F is coercive along the one unstable mode and even
+in s without load, so its zeros are w = 0 and a mirror pair; between two minima
+of F lies a maximum, so the pair is stable and w = 0 unstable.  At P_bar_h
+itself the flat beam is the one equilibrium (F = b s^4 + ..., b > 0).
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from gaocvx import Scene
+from gaocvx.discrete import DiscreteProblem
+from gaocvx.nonconvex.stationary import equilibria
+from gaocvx.nonconvex.stationary1 import NOISE, noise_clusters, settled
+
+from nonconvex_independent import Discrete
+
+EPS = float(np.finfo(float).eps)
+
+
+def _aluminium(elements: int, axial: float) -> dict:
+    return {"beam": {"model": "gao", "supports": "P4", "length": 1.0, "E": 7e10, "nu": 0.33,
+                     "half_thickness": 0.02, "width": 0.05},
+            "load": {"axial": axial}, "mesh": {"elements": elements}}
+
+
+def _limit(elements: int) -> float:
+    return DiscreteProblem(Scene.from_dict(_aluminium(elements, 1.0)),
+                           check_convexity=False).P_bar_h
+
+
+def _line(fprime, own=1.0):
+    """A stand-in dF: ``(F, F', u, ok)`` with a beam ``u`` of energy scale ``own``."""
+    return lambda t: (0.0, fprime(t), np.array([own]), True), lambda u: float(u[0])
+
+
+def test_round_off_between_zeros_makes_one_cluster():
+    """F'(t) = 1e-3 (t - 1) plus a zigzag of 1e-15: |F'| t stays within NOISE eps
+    (2.2e-15 of the energy scale 1) up to |t - 1| = 1.2e-12, so the zeros
+    1 - 1e-13, 1 and 1 + 1e-13 are one cluster; the zero at 2, with F' = 5e-4 at
+    the sample 1.5 between, is not."""
+    dF, own = _line(lambda t: 1e-3 * (t - 1.0) + 1e-15 * math.sin(1e15 * t))
+    groups = noise_clusters([1.0 - 1e-13, 1.0, 1.0 + 1e-13, 2.0], dF, own, [0.5, 1.5])
+    assert groups == [[1.0 - 1e-13, 1.0, 1.0 + 1e-13], [2.0]]
+
+
+def test_a_pair_of_zeros_with_f_prime_above_round_off_between_stays_two():
+    """Zeros 1e-9 apart with |F'| t = 1e-12 at their midpoint, far above
+    NOISE eps = 2.2e-15: two equilibria (a fold's pair), not a cluster."""
+    dF, own = _line(lambda t: -4e6 * (t - 1.0) * (t - 1.0 - 1e-9))
+    assert abs(dF(1.0 + 5e-10)[1]) > 1e2 * NOISE * EPS
+    assert noise_clusters([1.0, 1.0 + 1e-9], dF, own, []) == [[1.0], [1.0 + 1e-9]]
+
+
+def test_an_inadmissible_amplitude_counts_as_settled():
+    """F = inf (no admissible beam): classify takes that side as it is."""
+    dF = lambda t: (math.inf, 0.0, None, False)  # noqa: E731
+    assert settled(dF, lambda u: 1.0, 0.5)
+
+
+def _mirror_pair_and_flat(scene, eqs):
+    assert len(eqs) == 3, [(e.energy, e.stable, e.amplitudes) for e in eqs]
+    assert all(e.status == "optimal" for e in eqs)
+    flat = [e for e in eqs if np.max(np.abs(e.w)) == 0.0]
+    pair = [e for e in eqs if np.max(np.abs(e.w)) > 0.0]
+    assert len(flat) == 1 and len(pair) == 2
+    assert not flat[0].stable and all(e.stable for e in pair)
+    a, b = pair
+    # mirror images within F''s round-off (the zeros lie anywhere in it: 4e-4 of
+    # the amplitude on 16 elements)
+    size = np.max(np.abs(a.w))
+    assert np.max(np.abs(a.w + b.w)) <= 1e-3 * size
+    assert a.amplitudes[0] * b.amplitudes[0] < 0
+    # the energies as the independent formulation has them, below the flat beam's
+    ind = Discrete(scene, size)
+    for e in pair:
+        x = ind.from_nodal(e.w, e.slope)
+        energy, scale = ind.energy(x), ind.parts_scale(x) * ind.E0
+        assert abs(energy - e.energy) <= 1e-12 * scale, (energy, e.energy, scale)
+        assert energy < 0.0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("elements", [4, 16])
+def test_unloaded_1e_12_above_the_limit_lists_a_mirror_pair_and_the_flat_beam(elements):
+    """P_bar_h (1 + 1e-12), no load: before, 14 entries on 4 elements (13 on 16),
+    most of the buckled copies labelled unstable, all `optimal`."""
+    scene = Scene.from_dict(_aluminium(elements, _limit(elements) * (1 + 1e-12)))
+    eqs = equilibria(scene)
+    _mirror_pair_and_flat(scene, eqs)
+    assert not eqs[0].complete   # (the merged zeros lie beyond the proof's resolution)
+
+
+def test_unloaded_at_the_limit_lists_the_flat_beam_once_and_stable():
+    """At P_bar_h exactly, no load: the flat beam only, a (quartic) minimum.
+    Before: two entries, both unstable and `inaccurate` (4 elements; 28 on 16)."""
+    scene = Scene.from_dict(_aluminium(4, _limit(4)))
+    eqs = equilibria(scene)
+    assert len(eqs) == 1, [(e.energy, e.stable, e.amplitudes) for e in eqs]
+    assert eqs[0].stable and eqs[0].status == "optimal"
+    assert np.max(np.abs(eqs[0].w)) == 0.0
