@@ -4,7 +4,7 @@ import copy
 import math
 
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import assume, given, settings, strategies as st
 
 from conftest import scene_dict
 from gaocvx import Scene, SceneError, load_scene
@@ -191,6 +191,11 @@ def test_random_input_never_crashes_the_cli(tmp_path_factory, changes):
         d = mutate(d, path, value)
     sets = [f"--set={p}={v!r}" for p, v in changes if isinstance(v, (int, float, str))
             and not isinstance(v, bool)]
+    # (a valid mesh of up to 1e6 elements is solved, not refused: a draw of
+    # mesh.elements = 999999 took over 10 min and 14 GB in the fast suite; the
+    # cost of fine meshes is the benchmarks' concern, not this test's)
+    assume(not any(p == "mesh.elements" and isinstance(v, (int, float)) and v > 2000
+                   for p, v in changes))
     f = tmp_path_factory.mktemp("s") / "scene.toml"
     f.write_text('[beam]\nsupports = "P4"\nlength = 1.0\nE = 2.1e11\nnu = 0.3\n'
                  'half_thickness = 0.1\nwidth = 1.0\n[load]\nq = -5e7\n[mesh]\nelements = 4\n')
