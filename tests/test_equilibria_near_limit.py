@@ -19,7 +19,7 @@ import pytest
 from gaocvx import Scene
 from gaocvx.discrete import DiscreteProblem
 from gaocvx.nonconvex.stationary import equilibria
-from gaocvx.nonconvex.stationary1 import NOISE, noise_clusters, settled
+from gaocvx.nonconvex.stationary1 import NOISE, noise_clusters, round_off, settled
 
 from nonconvex_independent import Discrete
 
@@ -38,32 +38,34 @@ def _limit(elements: int) -> float:
 
 
 def _line(fprime, own=1.0):
-    """A stand-in dF: ``(F, F', u, ok)`` with a beam ``u`` of energy scale ``own``."""
-    return lambda t: (0.0, fprime(t), np.array([own]), True), lambda u: float(u[0])
+    """A stand-in dF, ``(F, F', u, ok)``, and its round-off NOISE eps own / |t|
+    (a beam of energy scale ``own`` and size |t|)."""
+    return (lambda t: (0.0, fprime(t), np.array([own]), True),
+            lambda t, u: NOISE * EPS * float(u[0]) / abs(t))
 
 
 def test_round_off_between_zeros_makes_one_cluster():
     """F'(t) = 1e-3 (t - 1) plus a zigzag of 1e-15: |F'| t stays within NOISE eps
-    (2.2e-15 of the energy scale 1) up to |t - 1| = 1.2e-12, so the zeros
+    (2.2e-14 of the energy scale 1) up to |t - 1| = 2e-11, so the zeros
     1 - 1e-13, 1 and 1 + 1e-13 are one cluster; the zero at 2, with F' = 5e-4 at
     the sample 1.5 between, is not."""
-    dF, own = _line(lambda t: 1e-3 * (t - 1.0) + 1e-15 * math.sin(1e15 * t))
-    groups = noise_clusters([1.0 - 1e-13, 1.0, 1.0 + 1e-13, 2.0], dF, own, [0.5, 1.5])
+    dF, noise = _line(lambda t: 1e-3 * (t - 1.0) + 1e-15 * math.sin(1e15 * t))
+    groups = noise_clusters([1.0 - 1e-13, 1.0, 1.0 + 1e-13, 2.0], dF, noise, [0.5, 1.5])
     assert groups == [[1.0 - 1e-13, 1.0, 1.0 + 1e-13], [2.0]]
 
 
 def test_a_pair_of_zeros_with_f_prime_above_round_off_between_stays_two():
-    """Zeros 1e-9 apart with |F'| t = 1e-12 at their midpoint, far above
-    NOISE eps = 2.2e-15: two equilibria (a fold's pair), not a cluster."""
-    dF, own = _line(lambda t: -4e6 * (t - 1.0) * (t - 1.0 - 1e-9))
+    """Zeros 1e-9 apart with |F'| t = 1e-10 at their midpoint, far above
+    NOISE eps = 2.2e-14: two equilibria (a fold's pair), not a cluster."""
+    dF, noise = _line(lambda t: -4e8 * (t - 1.0) * (t - 1.0 - 1e-9))
     assert abs(dF(1.0 + 5e-10)[1]) > 1e2 * NOISE * EPS
-    assert noise_clusters([1.0, 1.0 + 1e-9], dF, own, []) == [[1.0], [1.0 + 1e-9]]
+    assert noise_clusters([1.0, 1.0 + 1e-9], dF, noise, []) == [[1.0], [1.0 + 1e-9]]
 
 
 def test_an_inadmissible_amplitude_counts_as_settled():
     """F = inf (no admissible beam): classify takes that side as it is."""
     dF = lambda t: (math.inf, 0.0, None, False)  # noqa: E731
-    assert settled(dF, lambda u: 1.0, 0.5)
+    assert settled(dF, lambda t, u: 1.0, 0.5)
 
 
 def _mirror_pair_and_flat(scene, eqs):
@@ -107,3 +109,37 @@ def test_unloaded_at_the_limit_lists_the_flat_beam_once_and_stable():
     assert len(eqs) == 1, [(e.energy, e.stable, e.amplitudes) for e in eqs]
     assert eqs[0].stable and eqs[0].status == "optimal"
     assert np.max(np.abs(eqs[0].w)) == 0.0
+
+
+def _slices(scene):
+    """The scene's reduced function as equilibria() builds it (one mode, no obstacle)."""
+    from gaocvx.nonconvex.bounds import equilibrium_box
+    from gaocvx.nonconvex.fast import FastProgram
+    from gaocvx.nonconvex.minimum import rescale_for
+    from gaocvx.nonconvex.modes import unstable_modes
+    dp = DiscreteProblem(scene, check_convexity=False)
+    modes = unstable_modes(dp)
+    dp = rescale_for(dp, modes)
+    S = float(equilibrium_box(dp, float(modes.lam[0]) * (1.0 - 1e-9)))
+    return dp, FastProgram(dp, modes), S
+
+
+@pytest.mark.parametrize("fraction, q", [(1e-11, 0.0), (1e-12, 0.0), (0.3, 0.0), (0.3, -1e2),
+                                         (0.3, -1e4), (1.0, -1e6)])
+def test_f_prime_scatters_within_its_round_off_estimate(fraction, q):
+    """round_off(), the floor under the proof's tolerance and the probes' threshold,
+    bounds F''s round-off: F' at nine amplitudes t (1 + e), |e| <= 1e-12, where
+    the true F' is a line to far below round-off, scatters about the fitted line
+    by less, over the amplitude range, with and without load.  (Near the limit
+    without load the proof's tolerance from dtol alone was up to 5e3 times below
+    that scatter: 16 elements, 1e-11 above it.)"""
+    d = _aluminium(8, _limit(8) * (1 + fraction))
+    d["load"]["q"] = q
+    dp, prog, S = _slices(Scene.from_dict(d))
+    e = np.linspace(-1e-12, 1e-12, 9)
+    for t in np.linspace(-S, S, 9):
+        t = t or 1e-3 * S
+        values = np.array([float(prog.reduced([t * (1 + x)])[1][0]) for x in e])
+        scatter = np.max(np.abs(values - np.polyval(np.polyfit(e, values, 1), e)))
+        bound = round_off(dp, prog.reduced([t])[2], t)
+        assert scatter <= bound, (t / S, scatter, bound)

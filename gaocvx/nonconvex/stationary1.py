@@ -24,7 +24,7 @@ from .completeness import proven_roots
 from .contours import sampled_roots
 from .equilibrium import Equilibrium, same_point
 
-__all__ = ["classify", "find_line", "noise_clusters", "settled", "ROOT_TOL", "RHO",
+__all__ = ["classify", "find_line", "noise_clusters", "round_off", "settled", "ROOT_TOL", "RHO",
            "DERIVATIVE_TOL", "DENSE_DERIVATIVE_TOL", "CONTACT_DERIVATIVE_TOL", "NOISE"]
 
 log = logging.getLogger(__name__)
@@ -44,12 +44,13 @@ DENSE_DERIVATIVE_TOL = 1e-7
 # The contact slices accept violations of 1e-9 and their active sets kink F':
 # taken ten times looser than the smooth slices.
 CONTACT_DERIVATIVE_TOL = 1e-8
-# F' at an amplitude t is round-off where |F'(t)| |t| is within NOISE eps_mach
-# times the slice's own energy scale (the sum of |energy parts|): F' is a sum of
-# terms of about own / |t| that cancel.  Measured without load 1e-12 above
-# P_bar_h (aluminium P4, 16 elements): F''s scatter 1e-19 program units at
-# t = 4.4e-5, eps_mach own / |t| = 1e-19 there.
-NOISE = 10.0
+# F''s round-off at a slice: NOISE eps_mach times its energy scale (the sum of
+# |energy parts|) over the beam's size in the modes' norm (:func:`round_off`): F'
+# is a sum of terms of about that size that cancel.  F''s scatter about a line
+# through 9 amplitudes 1e-12 apart, measured (P4, 8 elements): 0.9 eps own / size
+# without load 1e-11 above P_bar_h (1e-19 program units on 16 elements at 1e-12),
+# up to 8.6 under a load of -1e4 to -1e6 N/m; ten times the larger.
+NOISE = 100.0
 _EPS = float(np.finfo(float).eps)
 
 
@@ -80,16 +81,30 @@ def classify(dF, r, h) -> tuple:
     return bool(right[1] > 0 if fr else left[1] < 0), curvature
 
 
-def settled(dF, own, t) -> bool:
-    """Whether ``F'(t)`` rises above its round-off (:data:`NOISE`), or ``t`` is
-    inadmissible (``F = inf``: :func:`classify` takes that side as it is)."""
+def round_off(dp, u, t) -> float:
+    """F''s round-off at the amplitude ``t`` whose slice is the beam ``u``.
+
+    ``NOISE`` eps_mach times the beam's energy scale over its size in the modes'
+    norm, ``max(|t|, sqrt(u'Gu))`` (the modes are G-normalised: ``|t|`` without
+    load, larger where the load deflects the beam); 0 for the unloaded flat beam.
+    """
+    own = sum(abs(v) for v in dp.energy_parts(u).values())
+    if own == 0.0:
+        return 0.0
+    size = max(abs(t), math.sqrt(max(float(u @ (dp.G @ u)), 0.0)))
+    return NOISE * _EPS * own / size if size > 0.0 else math.inf
+
+
+def settled(dF, noise, t) -> bool:
+    """Whether ``|F'(t)|`` rises above ``noise(t, u)`` (:func:`round_off`), or
+    ``t`` is inadmissible (``F = inf``: :func:`classify` takes that side as it is)."""
     F, d, u = dF(t)[:3]
     if not math.isfinite(F) or u is None:
         return True
-    return abs(d) * abs(t) > NOISE * _EPS * own(u)
+    return abs(d) > noise(t, u)
 
 
-def noise_clusters(roots, dF, own, points) -> list:
+def noise_clusters(roots, dF, noise, points) -> list:
     """``roots`` (sorted) in groups between which F' stays within round-off.
 
     Neighbouring zeros are one where F' at every sampled amplitude between them
@@ -103,7 +118,7 @@ def noise_clusters(roots, dF, own, points) -> list:
         if groups:
             a = groups[-1][-1]
             between = [t for t in points if a < t < r] + [0.5 * (a + r)]
-            if not any(settled(dF, own, t) for t in between):
+            if not any(settled(dF, noise, t) for t in between):
                 groups[-1].append(r)
                 continue
         groups.append([r])
@@ -234,8 +249,18 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
     def trusted(s):   # F' where the slice is solved and accurate, else NaN
         return dF(s)[1] if math.isfinite(dF(s)[0]) and dF(s)[3] else math.nan
 
+    noise_at = {}
+
+    def noise(t, u):   # (F''s round-off at t: a floor under the proof's tolerance)
+        if t not in noise_at:
+            noise_at[t] = round_off(dp, u, t)
+        return noise_at[t]
+
     def tol(a, b):
-        return dtol * (2.0 * c * S + max(abs(trusted(a)), abs(trusted(b))))
+        # (at least F''s round-off: without load 1e-11 above P_bar_h it was 5e3
+        # times dtol's share, and the proof took F' as known far below it)
+        floor = max(noise(t, dF(t)[2]) if dF(t)[2] is not None else 0.0 for t in (a, b))
+        return max(dtol * (2.0 * c * S + max(abs(trusted(a)), abs(trusted(b)))), floor)
 
     # (the ends listed as equilibria below only: F rising into the range there)
     held = [e for e, out in ends if dF(e)[2] is not None and
@@ -292,9 +317,6 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
         out.append(Equilibrium(float(dp.energy(u) * dp.E0), True, [float(inside)], dp.x.copy(),
                                w, slope, float(res), status, float(dp.P), math.nan, float(dp.W)))
 
-    def own_of(u):   # the slice's energy scale (program units)
-        return sum(abs(v) for v in dp.energy_parts(u).values())
-
     zeros = []   # (within 1e-9 S of an end or a zero before it: the same one)
     for r in sorted(set(roots)):
         if not any(abs(r - e) <= 1e-9 * S for e in [q.amplitudes[0] for q in out] + zeros):
@@ -302,7 +324,7 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
     # (zeros between which F' is round-off are one equilibrium: the one with the
     # least |F'|, its probes beyond the others; wider than the proof's resolution,
     # the proof no longer speaks for the others)
-    groups = noise_clusters(zeros, dF, own_of, sorted(cache))
+    groups = noise_clusters(zeros, dF, noise, sorted(cache))
     reps = [min([r for r in g if dF(r)[2] is not None] or g, key=lambda r: abs(dF(r)[1]))
             for g in groups]
     if any(g[-1] - g[0] > RHO * S for g in groups):
@@ -326,9 +348,9 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
         # 4 c h = 3e-20 at h = 1e-6 S, its round-off 1e-19: stable beams labelled
         # unstable -- an equilibria trial.)
         cap = min([0.25 * q for q in near] + [0.25 * (r - lo), 0.25 * (hi - r)])
-        while not (settled(dF, own_of, r - h) and settled(dF, own_of, r + h)) and 4 * h <= cap:
+        while not (settled(dF, noise, r - h) and settled(dF, noise, r + h)) and 4 * h <= cap:
             h *= 4.0
-        noisy = not (settled(dF, own_of, r - h) and settled(dF, own_of, r + h))
+        noisy = not (settled(dF, noise, r - h) and settled(dF, noise, r + h))
         if noisy:
             log.warning("equilibria: F' at the zero s = %.6g is round-off as far as the "
                         "probes reach (%.3g); its stability is not known", r, h)
