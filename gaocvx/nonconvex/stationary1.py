@@ -47,9 +47,9 @@ CONTACT_DERIVATIVE_TOL = 1e-8
 # F''s round-off at a slice: NOISE eps_mach times its energy scale (the sum of
 # |energy parts|) over the beam's size in the modes' norm (:func:`round_off`): F'
 # is a sum of terms of about that size that cancel.  F''s scatter about a line
-# through 9 amplitudes 1e-12 apart, measured (P4, 8 elements): 0.9 eps own / size
+# through 9 amplitudes 1e-12 apart, measured (P4, 8 elements): 1.1 eps own / size
 # without load 1e-11 above P_bar_h (1e-19 program units on 16 elements at 1e-12),
-# up to 8.6 under a load of -1e4 to -1e6 N/m; ten times the larger.
+# up to 8.6 under loads of -1e2 to -1e6 N/m; ten times the larger.
 NOISE = 100.0
 _EPS = float(np.finfo(float).eps)
 
