@@ -137,9 +137,14 @@ def test_f_prime_scatters_within_its_round_off_estimate(fraction, q):
     d["load"]["q"] = q
     dp, prog, S = _slices(Scene.from_dict(d))
     e = np.linspace(-1e-12, 1e-12, 9)
+    ratios = []
     for t in np.linspace(-S, S, 9):
         t = t or 1e-3 * S
         values = np.array([float(prog.reduced([t * (1 + x)])[1][0]) for x in e])
         scatter = np.max(np.abs(values - np.polyval(np.polyfit(e, values, 1), e)))
         bound = round_off(dp, prog.reduced([t])[2], t)
         assert scatter <= bound, (t / S, scatter, bound)
+        ratios.append(scatter / bound)
+    # (and not far above it: the labels' and the merging's thresholds are parts of
+    # it, LABEL_NOISE / NOISE and MERGE_NOISE / NOISE)
+    assert max(ratios) >= 1e-3, ratios

@@ -25,7 +25,8 @@ from .contours import sampled_roots
 from .equilibrium import Equilibrium, same_point
 
 __all__ = ["classify", "find_line", "noise_clusters", "round_off", "settled", "ROOT_TOL", "RHO",
-           "DERIVATIVE_TOL", "DENSE_DERIVATIVE_TOL", "CONTACT_DERIVATIVE_TOL", "NOISE"]
+           "DERIVATIVE_TOL", "DENSE_DERIVATIVE_TOL", "CONTACT_DERIVATIVE_TOL", "NOISE",
+           "LABEL_NOISE", "MERGE_NOISE"]
 
 log = logging.getLogger(__name__)
 
@@ -51,6 +52,13 @@ CONTACT_DERIVATIVE_TOL = 1e-8
 # without load 1e-11 above P_bar_h (1e-19 program units on 16 elements at 1e-12),
 # up to 8.6 under loads of -1e2 to -1e6 N/m; ten times the larger.
 NOISE = 100.0
+# The probes' labels count F' only above LABEL_NOISE eps own / size (the largest
+# measured scatter, 8.6, twice over); neighbouring zeros are one only where F'
+# between them stays within MERGE_NOISE (copies made by round-off 1e-12 above
+# P_bar_h: within 3 between them; a pair of true zeros 4.5e-6 from w = 0, 1e-14
+# above it: 33 to 40, merged at NOISE).
+LABEL_NOISE = 20.0
+MERGE_NOISE = 10.0
 _EPS = float(np.finfo(float).eps)
 
 
@@ -321,43 +329,64 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
     for r in sorted(set(roots)):
         if not any(abs(r - e) <= 1e-9 * S for e in [q.amplitudes[0] for q in out] + zeros):
             zeros.append(r)
-    # (zeros between which F' is round-off are one equilibrium: the one with the
-    # least |F'|, its probes beyond the others; wider than the proof's resolution,
-    # the proof no longer speaks for the others)
-    groups = noise_clusters(zeros, dF, noise, sorted(cache))
-    reps = [min([r for r in g if dF(r)[2] is not None] or g, key=lambda r: abs(dF(r)[1]))
-            for g in groups]
-    if any(g[-1] - g[0] > RHO * S for g in groups):
+    # (zeros between which F' is round-off are one equilibrium; the proof no longer
+    # places every zero within RHO S of a listed one: the merged ones may lie as far
+    # as the group is wide)
+    groups = noise_clusters(zeros, dF, lambda t, u: MERGE_NOISE / NOISE * noise(t, u),
+                            sorted(cache))
+    if any(len(g) > 1 for g in groups):
         complete = False
-    for r in reps:
-        F, d0, u, ok = dF(r)
-        if u is None:   # (a slice that failed inside the range: no beam to report)
-            log.warning("equilibria: no admissible slice at the zero s = %.17g", r)
-            out.append(None)   # (the caller's: the list is incomplete)
-            continue
+
+    def probed(t):   # F' at a probe above its round-off (LABEL_NOISE)
+        return settled(dF, lambda t, u: LABEL_NOISE / NOISE * noise(t, u), t)
+
+    for g in groups:
         # (probes closer than the nearest other zero: a P2 beam 9.8e-10 m into a
         # bed 8.4e-10 m below, 1.8e-6 S from w = 0, was called unstable from
         # probes 3e-6 S wide that straddled w = 0 -- an extreme-scale campaign)
         # (other zeros only, beyond the merging distance: an edge's probe beyond
-        # it counts as rising anyway)
-        near = [abs(q - r) for q in reps if abs(q - r) > 1e-9 * S]
-        h = max(min([1e-6 * S] + [0.25 * q for q in near]), 1e-10 * S)
+        # it counts as rising anyway)  A group is probed beyond its ends, from its
+        # middle.
+        mid, half = 0.5 * (g[0] + g[-1]), 0.5 * (g[-1] - g[0])
+        near = [abs(q - mid) - half for q in zeros if q not in g]
+        near = [q for q in near if q > 1e-9 * S]
+        h = half + max(min([1e-6 * S] + [0.25 * q for q in near]), 1e-10 * S)
         # Probes where F' is round-off label nothing: widened (within a quarter of
         # the distance to the next zero or the range's end) until F' rises above
         # it, else the label is not known.  (Without load 1e-12 above P_bar_h, F'
         # 4 c h = 3e-20 at h = 1e-6 S, its round-off 1e-19: stable beams labelled
         # unstable -- an equilibria trial.)
-        cap = min([0.25 * q for q in near] + [0.25 * (r - lo), 0.25 * (hi - r)])
-        while not (settled(dF, noise, r - h) and settled(dF, noise, r + h)) and 4 * h <= cap:
+        cap = half + min([0.25 * q for q in near] + [0.25 * (g[0] - lo), 0.25 * (hi - g[-1])])
+        while not (probed(mid - h) and probed(mid + h)) and 4 * h <= cap:
             h *= 4.0
-        noisy = not (settled(dF, noise, r - h) and settled(dF, noise, r + h))
+        noisy = not (probed(mid - h) and probed(mid + h))
+        stable, curvature = classify(dF, mid, h)
+        # A group's minimum of F (F falls into it and rises out of it) is at its
+        # lowest zero, its maximum at its highest (with a threshold of 100 eps for
+        # the merging, the flat beam -- F' = 0 exactly -- stood for it and the
+        # buckled pair beside it, and was listed stable, 1e-14 above P_bar_h: a
+        # review); zeros within the energy's round-off of it tie, and the one with the
+        # least |F'| is listed (at P_bar_h the flat beam, not a copy 1.8e-10 m off it)
+        solved = [q for q in g if dF(q)[2] is not None] or g
+        r = solved[0]
+        if len(solved) > 1:
+            best = (min if stable else max)(dF(q)[0] for q in solved)
+            tie = LABEL_NOISE * _EPS * max(sum(abs(v) for v in dp.energy_parts(dF(q)[2]).values())
+                                           for q in solved)
+            r = min([q for q in solved if abs(dF(q)[0] - best) <= tie],
+                    key=lambda q: abs(dF(q)[1]))
+        F, d0, u, ok = dF(r)
+        if u is None:   # (a slice that failed inside the range: no beam to report)
+            log.warning("equilibria: no admissible slice at the zero s = %.17g", r)
+            out.append(None)   # (the caller's: the list is incomplete)
+            continue
         if noisy:
             log.warning("equilibria: F' at the zero s = %.6g is round-off as far as the "
                         "probes reach (%.3g); its stability is not known", r, h)
-        stable, curvature = classify(dF, r, h)
         # (an inadmissible probe counts as rising only at an end of the range:
         # inside it the slice failed, and the stability is not known)
-        undecided = any(not math.isfinite(dF(t)[0]) and not at_an_end(t) for t in (r - h, r + h))
+        undecided = any(not math.isfinite(dF(t)[0]) and not at_an_end(t)
+                        for t in (mid - h, mid + h))
         w, slope = dp.to_physical(u)
         # |F'| times the amplitude: the work of the residual force, relative to
         # the equilibrium's energy scale (w = 0: the amplitude range's thousandth)
