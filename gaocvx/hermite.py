@@ -103,6 +103,16 @@ class HermiteEnergy:
         """Non-dimensional total energy."""
         return sum(self.energy_parts(u).values())
 
+    def energy_size(self, u) -> float:
+        """The energy's scale at ``u``: the sum of the parts' magnitudes.
+
+        The parts cancel (the axial term against the bending and Gao terms above
+        the limit), so the total's round-off is eps times this, not times the
+        total: every relative tolerance on an energy or a residual force's work is
+        taken against it.
+        """
+        return sum(abs(v) for v in self.energy_parts(u).values())
+
     def gradient(self, u) -> np.ndarray:
         """Gradient of the non-dimensional energy (continuous; semismooth with a foundation)."""
         u = np.asarray(u, float)

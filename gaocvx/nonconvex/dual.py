@@ -283,7 +283,7 @@ def tangent_bound(dp, u) -> DualBound | None:
     # the Gauss points, rounded to about N eps of its parts: that much lower, so that
     # the bound lies below the energy as the certificate evaluates it, in the mixed
     # form (a new-user trial found it 5e-15 of the energy above, a negative gap).)
-    parts = sum(abs(v) for v in dp.energy_parts(x).values()) + abs(value)
+    parts = dp.energy_size(x) + abs(value)
     lower = (value - 0.5 * float(r @ BandedCholesky(dp.G).solve(r)) / margin
              - 10.0 * (dp.n_nodes + 10) * EPS * parts)
     if not math.isfinite(lower):

@@ -57,7 +57,7 @@ def edge_minima(dp, grad, axes, S, roots, floor, starts=(), step=1e-3) -> list:
                   for t in np.linspace(0, 2 * math.pi, 8, endpoint=False)]
         if min(probes) < F0:
             continue   # (not a minimum at this resolution: a zero of ∇F is step 2's)
-        size = max(sum(abs(v) for v in dp.energy_parts(u).values()), floor) or 1.0
+        size = max(dp.energy_size(u), floor) or 1.0
         resid = float(np.linalg.norm(d)) * e / size
         status = "optimal" if ok and resid <= ROOT_TOL else "inaccurate"
         w, slope = dp.to_physical(u)

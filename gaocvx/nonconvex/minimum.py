@@ -390,7 +390,7 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None, stalled=None):
     lam1 = 0.0 if getattr(dp, "bilateral", False) else float(modes.lam[0]) * (1.0 - 1e-9)
     lo, hi = amplitude_box(dp, k, upper=start[0], lam1=lam1)
     floor = ENERGY_FLOOR * scene_energy(dp, modes)
-    scale = max(sum(abs(v) for v in dp.energy_parts(start[1]).values()), floor, 1e-300)
+    scale = max(dp.energy_size(start[1]), floor, 1e-300)
     # The dual bound first (no obstacle): where it holds, no branch and bound is needed.
     # (taken within a tenth of GAP_TOL: its gap is the round-off of the residual,
     # with the energy's round-off allowed for: 6e-14 to 1.4e-12 of the scale at 16-512

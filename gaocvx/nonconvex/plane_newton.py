@@ -82,7 +82,7 @@ def at_roots(dp, grad, hessian, roots, S, known=(), strict=False, floor=0.0,
         if any(same_point(r, h, S) for h in have):
             continue
         F, d, u, ok = grad(r)
-        size = sum(abs(v) for v in dp.energy_parts(u).values()) or 1.0
+        size = dp.energy_size(u) or 1.0
         work = float(np.linalg.norm(d)) * max(float(np.linalg.norm(r)), 1e-3 * S)
         res = work / size
         if res > ROOT_TOL and polish is not None and ok and work <= ROOT_TOL * max(size, floor):

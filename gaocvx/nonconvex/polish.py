@@ -188,7 +188,7 @@ def _polish_with(dp, prog, s, u, lam, lo, hi, judge):
     # and axial terms of 6e-3 cancel to -1.5e-8, and the polished point, 9e-17
     # "higher", was refused for an unpolished one with stationarity 1.2e-6 that
     # failed the certificate: campaign scene 1:52)
-    parts = sum(abs(v) for v in dp.energy_parts(u).values())
+    parts = dp.energy_size(u)
     if np.min(gap, initial=np.inf) > 1e-9 * reach \
             and dp.energy(polished) <= dp.energy(u) + 1e-12 * parts:
         return s, polished, np.zeros(prog.rows.shape[0])

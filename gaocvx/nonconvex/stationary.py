@@ -267,8 +267,7 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
     if out and all(e is not None for e in out):
         for e in out:
             u = dp.from_physical(e.w, e.slope)
-            parts = dp.energy_parts(u)
-            e.energy_scale = float(sum(abs(v) for v in parts.values()) * dp.E0)
+            e.energy_scale = float(dp.energy_size(u) * dp.E0)
             e.complete = complete
             # (the stability at the beam's own scale, where the energy is smooth
             # there: the probes of F step 1e-6 S, :func:`.probes.hessian_stability`)

@@ -96,7 +96,7 @@ def round_off(dp, u, t) -> float:
     norm, ``max(|t|, sqrt(u'Gu))`` (the modes are G-normalised: ``|t|`` without
     load, larger where the load deflects the beam); 0 for the unloaded flat beam.
     """
-    own = sum(abs(v) for v in dp.energy_parts(u).values())
+    own = dp.energy_size(u)
     if own == 0.0:
         return 0.0
     size = max(abs(t), math.sqrt(max(float(u @ (dp.G @ u)), 0.0)))
@@ -316,7 +316,7 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
             continue
         roots = [r for r in roots if abs(r - inside) > 1e-9 * S]
         w, slope = dp.to_physical(u)
-        size = max(sum(abs(v) for v in dp.energy_parts(u).values()), floor) or scale
+        size = max(dp.energy_size(u), floor) or scale
         res = abs(d0) * abs(outside - inside) / size
         # (the end of its own side: a lower edge next to the upper end is a fake one --
         # slices failing on all but the last 1e-7 of the range, a review's trial)
@@ -371,8 +371,7 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
         r = solved[0]
         if len(solved) > 1:
             best = (min if stable else max)(dF(q)[0] for q in solved)
-            tie = LABEL_NOISE * _EPS * max(sum(abs(v) for v in dp.energy_parts(dF(q)[2]).values())
-                                           for q in solved)
+            tie = LABEL_NOISE * _EPS * max(dp.energy_size(dF(q)[2]) for q in solved)
             r = min([q for q in solved if abs(dF(q)[0] - best) <= tie],
                     key=lambda q: abs(dF(q)[1]))
         F, d0, u, ok = dF(r)
@@ -393,7 +392,7 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
         # (at least the scene's own energy: a trivial equilibrium the dense
         # programs return as 1e-13 instead of 0 has energy parts of 1e-16, against
         # which any residual was too large)
-        own = sum(abs(v) for v in dp.energy_parts(u).values())
+        own = dp.energy_size(u)
         size = max(own, floor) or scale
         res = abs(d0) * max(abs(r), 1e-3 * S) / size
         if polish is not None and ok and res <= ROOT_TOL < res * size / max(own, 1e-300):
