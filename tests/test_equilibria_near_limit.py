@@ -19,7 +19,7 @@ import pytest
 from gaocvx import Scene
 from gaocvx.discrete import DiscreteProblem
 from gaocvx.nonconvex.stationary import equilibria
-from gaocvx.nonconvex.stationary1 import NOISE, noise_clusters, round_off, settled
+from gaocvx.nonconvex.roundoff import NOISE, noise_clusters, round_off, settled
 
 from nonconvex_independent import Discrete
 

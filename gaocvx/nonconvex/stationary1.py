@@ -5,8 +5,8 @@ per point) over the admissible amplitudes, refines each sign change and each
 close pair of zeros (:func:`.contours.sampled_roots`), locates the edges an
 obstacle puts to the amplitudes, proves that no zero is missing
 (:mod:`.completeness`), takes zeros between which F' is round-off for one
-(:func:`noise_clusters`), and labels each zero stable or unstable from probes
-where F' rises above its round-off (:func:`classify`, :func:`settled`).
+(:func:`.roundoff.noise_clusters`), and labels each zero stable or unstable from
+probes where F' rises above its round-off (:func:`classify`, :mod:`.roundoff`).
 :func:`.stationary.equilibria` calls it and polishes what it finds;
 :mod:`.stationary2` is its counterpart for two modes.
 """
@@ -23,10 +23,11 @@ from ..errors import SceneError
 from .completeness import proven_roots
 from .contours import sampled_roots
 from .equilibrium import Equilibrium, same_point
+from .roundoff import (EPS, LABEL_NOISE, MERGE_NOISE, NOISE, noise_clusters, round_off, settled,
+                       widened)
 
-__all__ = ["classify", "find_line", "noise_clusters", "round_off", "settled", "ROOT_TOL", "RHO",
-           "DERIVATIVE_TOL", "DENSE_DERIVATIVE_TOL", "CONTACT_DERIVATIVE_TOL", "NOISE",
-           "LABEL_NOISE", "MERGE_NOISE"]
+__all__ = ["classify", "find_line", "ROOT_TOL", "RHO", "DERIVATIVE_TOL", "DENSE_DERIVATIVE_TOL",
+           "CONTACT_DERIVATIVE_TOL"]
 
 log = logging.getLogger(__name__)
 
@@ -45,21 +46,6 @@ DENSE_DERIVATIVE_TOL = 1e-7
 # The contact slices accept violations of 1e-9 and their active sets kink F':
 # taken ten times looser than the smooth slices.
 CONTACT_DERIVATIVE_TOL = 1e-8
-# F''s round-off at a slice: NOISE eps_mach times its energy scale (the sum of
-# |energy parts|) over the beam's size in the modes' norm (:func:`round_off`): F'
-# is a sum of terms of about that size that cancel.  F''s scatter about a line
-# through 9 amplitudes 1e-12 apart, measured (P4, 8 elements): 1.1 eps own / size
-# without load 1e-11 above P_bar_h (1e-19 program units on 16 elements at 1e-12),
-# up to 8.6 under loads of -1e2 to -1e6 N/m; ten times the larger.
-NOISE = 100.0
-# The probes' labels count F' only above LABEL_NOISE eps own / size (the largest
-# measured scatter, 8.6, twice over); neighbouring zeros are one only where F'
-# between them stays within MERGE_NOISE (copies made by round-off 1e-12 above
-# P_bar_h: within 3 between them; a pair of true zeros 4.5e-6 from w = 0, 1e-14
-# above it: 33 to 40, merged at NOISE).
-LABEL_NOISE = 20.0
-MERGE_NOISE = 10.0
-_EPS = float(np.finfo(float).eps)
 
 
 def classify(dF, r, h) -> tuple:
@@ -87,50 +73,6 @@ def classify(dF, r, h) -> tuple:
         return False, math.nan
     curvature = (right[1] - mid) / h if fr else (mid - left[1]) / h
     return bool(right[1] > 0 if fr else left[1] < 0), curvature
-
-
-def round_off(dp, u, t) -> float:
-    """F''s round-off at the amplitude ``t`` whose slice is the beam ``u``.
-
-    ``NOISE`` eps_mach times the beam's energy scale over its size in the modes'
-    norm, ``max(|t|, sqrt(u'Gu))`` (the modes are G-normalised: ``|t|`` without
-    load, larger where the load deflects the beam); 0 for the unloaded flat beam.
-    """
-    own = dp.energy_size(u)
-    if own == 0.0:
-        return 0.0
-    size = max(abs(t), math.sqrt(max(float(u @ (dp.G @ u)), 0.0)))
-    return NOISE * _EPS * own / size if size > 0.0 else math.inf
-
-
-def settled(dF, noise, t) -> bool:
-    """Whether ``|F'(t)|`` rises above ``noise(t, u)`` (:func:`round_off`), or
-    ``t`` is inadmissible (``F = inf``: :func:`classify` takes that side as it is)."""
-    F, d, u = dF(t)[:3]
-    if not math.isfinite(F) or u is None:
-        return True
-    return abs(d) > noise(t, u)
-
-
-def noise_clusters(roots, dF, noise, points) -> list:
-    """``roots`` (sorted) in groups between which F' stays within round-off.
-
-    Neighbouring zeros are one where F' at every sampled amplitude between them
-    (``points``) and at their midpoint is round-off (:func:`settled`): the round-off
-    of F' makes sign changes, each refined to a zero of its own.  (Without load
-    1e-12 above P_bar_h, 13 zeros within 4e-4 of the buckled beam's amplitude, 12
-    of them labelled unstable by probes in the noise: an equilibria trial.)
-    """
-    groups = []
-    for r in roots:
-        if groups:
-            a = groups[-1][-1]
-            between = [t for t in points if a < t < r] + [0.5 * (a + r)]
-            if not any(settled(dF, noise, t) for t in between):
-                groups[-1].append(r)
-                continue
-        groups.append([r])
-    return groups
 
 
 def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
@@ -357,9 +299,7 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
         # 4 c h = 3e-20 at h = 1e-6 S, its round-off 1e-19: stable beams labelled
         # unstable -- an equilibria trial.)
         cap = half + min([0.25 * q for q in near] + [0.25 * (g[0] - lo), 0.25 * (hi - g[-1])])
-        while not (probed(mid - h) and probed(mid + h)) and 4 * h <= cap:
-            h *= 4.0
-        noisy = not (probed(mid - h) and probed(mid + h))
+        h, noisy = widened(probed, mid, h, cap)
         stable, curvature = classify(dF, mid, h)
         # A group's minimum of F (F falls into it and rises out of it) is at its
         # lowest zero, its maximum at its highest (with a threshold of 100 eps for
@@ -371,7 +311,7 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
         r = solved[0]
         if len(solved) > 1:
             best = (min if stable else max)(dF(q)[0] for q in solved)
-            tie = LABEL_NOISE * _EPS * max(dp.energy_size(dF(q)[2]) for q in solved)
+            tie = LABEL_NOISE * EPS * max(dp.energy_size(dF(q)[2]) for q in solved)
             r = min([q for q in solved if abs(dF(q)[0] - best) <= tie],
                     key=lambda q: abs(dF(q)[1]))
         F, d0, u, ok = dF(r)
