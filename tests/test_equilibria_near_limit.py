@@ -12,13 +12,14 @@ itself the flat beam is the one equilibrium (F = b s^4 + ..., b > 0).
 """
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from gaocvx import Scene
 from gaocvx.discrete import DiscreteProblem
-from gaocvx.nonconvex.stationary import equilibria
+from gaocvx.nonconvex.stationary import equilibria, flat_classifier
 from gaocvx.nonconvex.roundoff import NOISE, noise_clusters, round_off, settled
 
 from nonconvex_independent import Discrete
@@ -66,6 +67,52 @@ def test_an_inadmissible_amplitude_counts_as_settled():
     """F = inf (no admissible beam): classify takes that side as it is."""
     dF = lambda t: (math.inf, 0.0, None, False)  # noqa: E731
     assert settled(dF, lambda t, u: 1.0, 0.5)
+
+
+class _Line:
+    """A stand-in slice program along one mode: ``reduced([t]) -> (F, [F'], u, ok)``
+    with ``u = [t]`` (size |t| in the modes' norm, G = 1) and energy scale 1, so F''s
+    round-off is NOISE eps / |t|; it counts its solves."""
+
+    def __init__(self, fprime):
+        self.fprime, self.solves = fprime, 0
+        self.G = np.eye(1)
+
+    def reduced(self, s):
+        self.solves += 1
+        t = float(s[0])
+        return 0.0, np.array([self.fprime(t)]), np.array([t]), True
+
+    def energy_size(self, u):
+        return 1.0
+
+
+def test_the_flat_beams_probes_widen_past_round_off_that_reverses_the_slope():
+    """F' = t^3 (a minimum of F at the flat beam, F = t^4 / 4) plus a round-off of
+    2e-18 against the slope: at 1e-6 S, where the probes sat before, F' reads
+    +1e-18 on the left and -1e-18 on the right, an unstable label.  Widened until
+    |F'| exceeds LABEL_NOISE eps / |t| (|t| >= 8e-4 here), the label is the
+    minimum's."""
+    line = _Line(lambda t: t**3 - 2e-18 * math.copysign(1.0, t))
+    stable, curvature, known = flat_classifier(line, line, 1.0, -1.0, 1.0, [])(np.zeros(1))
+    assert stable and known and curvature > 0
+
+
+def test_the_flat_beams_probes_stop_short_of_a_listed_equilibrium():
+    """The same F', with an equilibrium listed at 1e-4: the probes reach a quarter
+    of the way (2.5e-5), where F' is still round-off, and the label is not known."""
+    line = _Line(lambda t: t**3 - 2e-18 * math.copysign(1.0, t))
+    out = [SimpleNamespace(amplitudes=[1e-4])]
+    assert not flat_classifier(line, line, 1.0, -1.0, 1.0, out)(np.zeros(1))[2]
+
+
+def test_the_flat_beams_probes_stay_at_one_millionth_where_f_prime_is_clear():
+    """F' = -t (a maximum of F) is far above round-off at 1e-6 S: unstable, known,
+    from the three solves the fixed probes took (s = 0 and 1e-6 S either side)."""
+    line = _Line(lambda t: -t)
+    stable, curvature, known = flat_classifier(line, line, 1.0, -1.0, 1.0, [])(np.zeros(1))
+    assert not stable and known and curvature == pytest.approx(-1.0)
+    assert line.solves == 3
 
 
 def _mirror_pair_and_flat(scene, eqs):

@@ -243,10 +243,11 @@ def exact_flat(dp, modes, out, classify, relabel: bool = False, S: float = 0.0) 
     against 0, independently no KKT point; one mode, P1 under a point force:
     7.7e-12 m, stationarity 9.4e-6), their amplitude rows' multipliers taking
     up the residual.  Where none is listed it is added, its stability from
-    ``classify(s)`` -> ``(stable, curvature)`` at ``s = 0`` (also where the
-    entries reported as w = 0 disagree): without load at gap
-    0 an unstable equilibrium the searches missed (P4, two modes; P1, one),
-    lifting off along the first mode lowering the energy.  ``relabel``: the
+    ``classify(s)`` -> ``(stable, curvature[, known])`` at ``s = 0`` (also
+    where the entries reported as w = 0 disagree; where not ``known``, the
+    entry is ``inaccurate``): without load at gap 0 an unstable equilibrium
+    the searches missed (P4, two modes; P1, one), lifting off along the first
+    mode lowering the energy.  ``relabel``: the
     stability is ``classify``'s also where a listed entry is reported as
     w = 0 (two modes: the entry's label came from probes that do not see the
     kink of F at w = 0 -- central differences and 16 directions, or 8 probes
@@ -295,13 +296,15 @@ def exact_flat(dp, modes, out, classify, relabel: bool = False, S: float = 0.0) 
         if decided is not None:
             keep.stable, keep.curvature = bool(decided), math.nan
         elif relabel or len({e.stable for e in flat}) > 1:
-            stable, curvature = classify(np.zeros(modes.k))
+            stable, curvature, *known = classify(np.zeros(modes.k))
             keep.stable, keep.curvature = bool(stable), float(curvature)
+            if not all(known):   # (the probes' F' round-off: the label is not known)
+                keep.status = "inaccurate"
         return [e for e in out if e is keep or all(e is not f for f in flat)]
-    stable, curvature = (decided, math.nan) if decided is not None else \
+    stable, curvature, *known = (decided, math.nan) if decided is not None else \
         classify(np.zeros(modes.k))
     log.info("equilibria: the flat beam w = 0, an equilibrium, added (%s)",
              "stable" if stable else "unstable")
     return out + [Equilibrium(energy, bool(stable), [0.0] * modes.k, dp.x.copy(), zeros,
-                              zeros.copy(), 0.0, "optimal", float(dp.P), float(curvature),
-                              float(dp.W))]
+                              zeros.copy(), 0.0, "optimal" if all(known) else "inaccurate",
+                              float(dp.P), float(curvature), float(dp.W))]

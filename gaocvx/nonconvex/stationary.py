@@ -56,6 +56,7 @@ from . import stationary1 as line
 from .equilibrium import Equilibrium, check_has_minimum, check_mountain_pass
 from .images import complete_beams
 from .probes import hessian_stability
+from .roundoff import LABEL_NOISE, NOISE, round_off, settled, widened
 from .obstacle_checks import check_contact, exact_flat, global_minimisers
 from .whole_beam import polisher, settle
 from .zooms import own_scale
@@ -70,6 +71,40 @@ GRID = 121
 # At most this many (each is a solve of the reduced function): a bound on the
 # work a typo can ask for, far above any grid that resolves more roots.
 MAX_GRID = 100_000
+
+
+def flat_classifier(dp, prog, S, lo, hi, out):
+    """``classify(s) -> (stable, curvature, known)`` for the flat beam, ``s = 0``,
+    on an obstacle (:func:`.obstacle_checks.exact_flat`), from F' one mode along.
+
+    Probes 1e-6 ``S`` either side (:func:`.stationary1.classify`), widened
+    fourfold while F' at them is round-off (:func:`.roundoff.widened`), up to a
+    quarter of the way to the nearest listed equilibrium ``out`` or to the
+    admissible range's end ``lo``, ``hi``; ``known`` is False where they never
+    rise above it.  (Fixed at 1e-6 S before, as :mod:`.stationary1`'s probes were
+    until F' near P_bar_h, round-off there, labelled stable beams unstable.)
+    """
+    cache = {}
+
+    def dF(t):   # (one solve per probe)
+        if t not in cache:
+            F, d, u, ok = prog.reduced([t])
+            cache[t] = (F, float(d[0]), u, ok)
+        return cache[t]
+
+    def probed(t):
+        return settled(dF, lambda t, u: LABEL_NOISE / NOISE * round_off(dp, u, t), t)
+
+    def classify(s):
+        others = [abs(float(e.amplitudes[0])) for e in out if e is not None]
+        cap = min([0.25 * q for q in others if q > 1e-9 * S] + [0.25 * -lo, 0.25 * hi])
+        h, noisy = widened(probed, 0.0, 1e-6 * S, cap)
+        if noisy:
+            log.warning("equilibria: F' next to the flat beam is round-off as far as the "
+                        "probes reach (%.3g); its stability is not known", h)
+        stable, curvature = line.classify(dF, 0.0, h)
+        return stable, curvature, not noisy
+    return classify
 
 
 def _convex_equilibrium(scene, elements, dp) -> list:
@@ -252,11 +287,7 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         if obstacle:
             check_contact(dp, prog, out, polish, S)
         if obstacle and None not in out:
-            def classify(s):
-                def dF(t):   # (one solve per probe)
-                    F, d = prog.reduced([t])[:2]
-                    return F, float(d[0])
-                return line.classify(dF, 0.0, 1e-6 * S)
+            classify = flat_classifier(dp, prog, S, float(lo[0]), float(hi[0]), out)
             # (the beams near the flat one polished on the whole beam, listed once)
             out = sorted(settle(dp, polish, exact_flat(dp, modes, out, classify, S=S), S,
                                 modes),
