@@ -115,6 +115,44 @@ def test_the_flat_beams_probes_stay_at_one_millionth_where_f_prime_is_clear():
     assert line.solves == 3
 
 
+class _Beam:
+    """A stand-in problem for find_line: one DOF, the amplitude itself (G = 1),
+    energy scale 1 (F''s round-off NOISE eps / |t|, far below the slices'
+    accuracy here)."""
+    G, x, E0, P, W = np.eye(1), np.array([0.0, 1.0]), 1.0, 0.0, 1.0
+
+    def __init__(self, F, fprime):
+        self.F, self.fprime = F, fprime
+
+    def reduced(self, s):
+        t = float(s[0])
+        return self.F(t), np.array([self.fprime(t)]), np.array([t]), True
+
+    def to_physical(self, u):
+        return np.array([0.0, float(u[0])]), np.zeros(2)
+
+    def energy(self, u):
+        return self.F(float(u[0]))
+
+    def energy_size(self, u):
+        return 1.0
+
+
+def test_probes_count_f_prime_only_beyond_the_slices_accuracy():
+    """A degenerate minimum of F at s = 0.5, F' = (s - 0.5)^3, and a slice error
+    of half the accuracy the proof allows (dtol of 2 c S = 2e-9) that reverses the
+    slope next to it: at the probes' 1e-6 S, F' reads -+1e-9 and the minimum was
+    labelled unstable.  F' counts only beyond that accuracy (|s - 0.5| > 1.4e-3):
+    the probes widen there and the label is the minimum's."""
+    from gaocvx.nonconvex.stationary1 import find_line
+    err = 1e-9
+    beam = _Beam(lambda t: (t - 0.5) ** 4 / 4 - err * abs(t - 0.5),
+                 lambda t: (t - 0.5) ** 3 - err * np.sign(t - 0.5))
+    eqs, _ = find_line(beam, beam, 1.0, np.array([]), 121, -1.0, 1.0, 1.0, 1.0, dtol=1e-9)
+    assert len(eqs) == 1 and eqs[0].amplitudes[0] == pytest.approx(0.5, abs=1e-6)
+    assert eqs[0].stable
+
+
 def _mirror_pair_and_flat(scene, eqs):
     assert len(eqs) == 3, [(e.energy, e.stable, e.amplitudes) for e in eqs]
     assert all(e.status == "optimal" for e in eqs)

@@ -73,16 +73,17 @@ GRID = 121
 MAX_GRID = 100_000
 
 
-def flat_classifier(dp, prog, S, lo, hi, out):
+def flat_classifier(dp, prog, S, lo, hi, out, accuracy=0.0):
     """``classify(s) -> (stable, curvature, known)`` for the flat beam, ``s = 0``,
     on an obstacle (:func:`.obstacle_checks.exact_flat`), from F' one mode along.
 
     Probes 1e-6 ``S`` either side (:func:`.stationary1.classify`), widened
-    fourfold while F' at them is round-off (:func:`.roundoff.widened`), up to a
-    quarter of the way to the nearest listed equilibrium ``out`` or to the
-    admissible range's end ``lo``, ``hi``; ``known`` is False where they never
-    rise above it.  (Fixed at 1e-6 S before, as :mod:`.stationary1`'s probes were
-    until F' near P_bar_h, round-off there, labelled stable beams unstable.)
+    fourfold while F' at them is round-off (:func:`.roundoff.widened`) or
+    within the slices' ``accuracy``, up to a quarter of the way to the nearest
+    listed equilibrium ``out`` or to the admissible range's end ``lo``, ``hi``;
+    ``known`` is False where they never rise above it.  (Fixed at 1e-6 S before,
+    as :mod:`.stationary1`'s probes were until F' near P_bar_h, round-off there,
+    labelled stable beams unstable.)
     """
     cache = {}
 
@@ -93,7 +94,8 @@ def flat_classifier(dp, prog, S, lo, hi, out):
         return cache[t]
 
     def probed(t):
-        return settled(dF, lambda t, u: LABEL_NOISE / NOISE * round_off(dp, u, t), t)
+        return settled(dF, lambda t, u: max(LABEL_NOISE / NOISE * round_off(dp, u, t),
+                                            accuracy), t)
 
     def classify(s):
         others = [abs(float(e.amplitudes[0])) for e in out if e is not None]
@@ -287,7 +289,8 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         if obstacle:
             check_contact(dp, prog, out, polish, S)
         if obstacle and None not in out:
-            classify = flat_classifier(dp, prog, S, float(lo[0]), float(hi[0]), out)
+            classify = flat_classifier(dp, prog, S, float(lo[0]), float(hi[0]), out,
+                                       dtol * 2.0 * float(modes.c[0]) * S)
             # (the beams near the flat one polished on the whole beam, listed once)
             out = sorted(settle(dp, polish, exact_flat(dp, modes, out, classify, S=S), S,
                                 modes),

@@ -279,8 +279,12 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
     if any(len(g) > 1 for g in groups):
         complete = False
 
-    def probed(t):   # F' at a probe above its round-off (LABEL_NOISE)
-        return settled(dF, lambda t, u: LABEL_NOISE / NOISE * noise(t, u), t)
+    # F' at a probe above its round-off (LABEL_NOISE) and above the slices' own
+    # accuracy as the proof takes it, dtol of the concave part's 2 c S
+    accuracy = dtol * 2.0 * c * S / (1.0 - dtol)
+
+    def probed(t):
+        return settled(dF, lambda t, u: max(LABEL_NOISE / NOISE * noise(t, u), accuracy), t)
 
     for g in groups:
         # (probes closer than the nearest other zero: a P2 beam 9.8e-10 m into a
@@ -308,6 +312,9 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
         # review); zeros within the energy's round-off of it tie, and the one with the
         # least |F'| is listed (at P_bar_h the flat beam, not a copy 1.8e-10 m off it)
         solved = [q for q in g if dF(q)[2] is not None] or g
+        if len(solved) < len(g):   # (the list is not proven already: any merge)
+            log.warning("equilibria: %d of %d zeros merged at s = %.6g had no slice",
+                        len(g) - len(solved), len(g), mid)
         r = solved[0]
         if len(solved) > 1:
             best = (min if stable else max)(dF(q)[0] for q in solved)
