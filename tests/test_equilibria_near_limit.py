@@ -19,6 +19,7 @@ import pytest
 
 from gaocvx import Scene
 from gaocvx.discrete import DiscreteProblem
+from gaocvx.nonconvex.equilibrium import global_minima
 from gaocvx.nonconvex.stationary import equilibria, flat_classifier
 from gaocvx.nonconvex.roundoff import NOISE, noise_clusters, round_off, settled
 
@@ -184,6 +185,25 @@ def test_unloaded_1e_12_above_the_limit_lists_a_mirror_pair_and_the_flat_beam(el
     eqs = equilibria(scene)
     _mirror_pair_and_flat(scene, eqs)
     assert not eqs[0].complete   # (the merged zeros lie beyond the proof's resolution)
+    # the global minima are the pair (w = 0 lies within TIE of them, but is unstable)
+    assert global_minima(eqs) == [e.stable for e in eqs]
+
+
+def test_an_unstable_equilibrium_within_the_tie_is_no_global_minimum():
+    """The list 1e-12 above P_bar_h without load (4 elements, as equilibria()
+    gives it): the buckled pair at -9.08e-23 J (energy scale 3.6e-10 J, the parts)
+    and w = 0 at 0 J, unstable.  All three lie within TIE of the scale, and a path
+    marked all three global; a global minimiser is a local one, so stable."""
+    eqs = [SimpleNamespace(energy=-9.082222544335564e-23, energy_scale=3.63209258645888e-10,
+                           stable=True),
+           SimpleNamespace(energy=-9.07295812147497e-23, energy_scale=3.6319214606011794e-10,
+                           stable=True),
+           SimpleNamespace(energy=0.0, energy_scale=0.0, stable=False)]
+    assert global_minima(eqs) == [True, True, False]
+    # where none is stable (the list is then inaccurate) the lowest is still marked
+    for e in eqs:
+        e.stable = False
+    assert global_minima(eqs) == [True, True, True]
 
 
 def test_unloaded_at_the_limit_lists_the_flat_beam_once_and_stable():
