@@ -73,16 +73,18 @@ def test_an_inadmissible_amplitude_counts_as_settled():
 class _Line:
     """A stand-in slice program along one mode: ``reduced([t]) -> (F, [F'], u, ok)``
     with ``u = [t]`` (size |t| in the modes' norm, G = 1) and energy scale 1, so F''s
-    round-off is NOISE eps / |t|; it counts its solves."""
+    round-off is NOISE eps / |t|; inadmissible (F = inf) below ``lo``; it counts its
+    solves."""
 
-    def __init__(self, fprime):
-        self.fprime, self.solves = fprime, 0
+    def __init__(self, fprime, lo=-math.inf):
+        self.fprime, self.lo, self.solves = fprime, lo, 0
         self.G = np.eye(1)
 
     def reduced(self, s):
         self.solves += 1
         t = float(s[0])
-        return 0.0, np.array([self.fprime(t)]), np.array([t]), True
+        F = math.inf if t < self.lo else 0.0
+        return F, np.array([self.fprime(t)]), np.array([t]), True
 
     def energy_size(self, u):
         return 1.0
@@ -92,19 +94,40 @@ def test_the_flat_beams_probes_widen_past_round_off_that_reverses_the_slope():
     """F' = t^3 (a minimum of F at the flat beam, F = t^4 / 4) plus a round-off of
     2e-18 against the slope: at 1e-6 S, where the probes sat before, F' reads
     +1e-18 on the left and -1e-18 on the right, an unstable label.  Widened until
-    |F'| exceeds LABEL_NOISE eps / |t| (|t| >= 8e-4 here), the label is the
-    minimum's."""
+    |F'| exceeds LABEL_NOISE eps / |t| (|t| > 2.6e-4 here; the probes land at
+    1.02e-3), the label is the minimum's."""
     line = _Line(lambda t: t**3 - 2e-18 * math.copysign(1.0, t))
     stable, curvature, known = flat_classifier(line, line, 1.0, -1.0, 1.0, [])(np.zeros(1))
     assert stable and known and curvature > 0
 
 
 def test_the_flat_beams_probes_stop_short_of_a_listed_equilibrium():
-    """The same F', with an equilibrium listed at 1e-4: the probes reach a quarter
-    of the way (2.5e-5), where F' is still round-off, and the label is not known."""
+    """The same F', with an equilibrium listed at 1e-4: the probes may reach a
+    quarter of the way (2.5e-5; fourfold steps stop at 1.6e-5), where F' is still
+    round-off, and the label is not known."""
     line = _Line(lambda t: t**3 - 2e-18 * math.copysign(1.0, t))
     out = [SimpleNamespace(amplitudes=[1e-4])]
     assert not flat_classifier(line, line, 1.0, -1.0, 1.0, out)(np.zeros(1))[2]
+
+
+def test_the_flat_beams_probes_widen_on_the_side_that_is_admissible():
+    """The same F' with the admissible amplitudes ending 1e-7 S below s = 0 (an
+    obstacle): the left probe is inadmissible, a side that counts as rising, and
+    the right one widens past round-off.  (Capped at a quarter of the way to that
+    end, 2.5e-8 S, the probes could not widen, and the flat beam's label was not
+    known: a review.)"""
+    line = _Line(lambda t: t**3 - 2e-18 * math.copysign(1.0, t), lo=-1e-7)
+    stable, curvature, known = flat_classifier(line, line, 1.0, -1e-7, 1.0, [])(np.zeros(1))
+    assert stable and known
+
+
+def test_the_flat_beams_probes_leave_out_entries_that_are_the_flat_beam():
+    """An entry within MERGE S of s = 0 (5e-7 here) is the flat beam itself,
+    merged into it: it does not cap the probes, which widen past round-off."""
+    line = _Line(lambda t: t**3 - 2e-18 * math.copysign(1.0, t))
+    out = [SimpleNamespace(amplitudes=[5e-7])]
+    stable, curvature, known = flat_classifier(line, line, 1.0, -1.0, 1.0, out)(np.zeros(1))
+    assert stable and known
 
 
 def test_the_flat_beams_probes_stay_at_one_millionth_where_f_prime_is_clear():

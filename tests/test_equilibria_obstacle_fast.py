@@ -192,3 +192,44 @@ def test_two_unstable_modes_with_an_obstacle():
     assert len(dense) == len(fast)
     assert all(any(same(f, e) for e in dense) for f in fast)
     assert all(any(same(e, f) for f in fast) for e in dense)
+
+
+def _flat_on_obstacle(monkeypatch):
+    """P1 without load at 1.3 P_bar_h on an obstacle at gap 0 (8 elements): w = 0
+    is an equilibrium, certified on the whole beam; the second-order conditions
+    are switched off (as beyond 1000 unknowns), so the probes label it."""
+    from gaocvx.nonconvex.minimum import rescale_for
+    from gaocvx.nonconvex.modes import unstable_modes
+    monkeypatch.setattr("gaocvx.nonconvex.whole_beam.MAX_UNKNOWNS", -1)
+    dp = DiscreteProblem(_scene("P1", q=0.0, gap=0.0, elements=8), check_convexity=False)
+    modes = unstable_modes(dp)
+    return rescale_for(dp, modes), modes
+
+
+def test_the_flat_beam_whose_probes_tell_nothing_is_listed_inaccurate(monkeypatch):
+    """exact_flat adds w = 0 with the probes' label; where they never rose above
+    F''s round-off (``known`` False) the entry is `inaccurate`, not `optimal`."""
+    from gaocvx.nonconvex.obstacle_checks import exact_flat
+    dp, modes = _flat_on_obstacle(monkeypatch)
+    unknown = exact_flat(dp, modes, [], lambda s: (True, 1.0, False), S=1.0)
+    assert [(e.stable, e.status) for e in unknown] == [(True, "inaccurate")]
+    assert np.max(np.abs(unknown[0].w)) == 0.0
+    # (two modes' classify gives two values: the label stands)
+    known = exact_flat(dp, modes, [], lambda s: (True, 1.0), S=1.0)
+    assert [(e.stable, e.status) for e in known] == [(True, "optimal")]
+
+
+def test_an_inaccurate_entry_merged_into_the_flat_beam_is_probed_again(monkeypatch):
+    """An entry at w = 0 listed `inaccurate` and unstable (its probes in round-off:
+    a guess) becomes the exact flat beam, `optimal`: its label is the probes' at
+    s = 0, not the guess.  (Before, the guess stood under `optimal`: a review's
+    P1 beam at gap 0, 1.3 P_bar_h.)"""
+    from gaocvx.nonconvex.equilibrium import Equilibrium
+    from gaocvx.nonconvex.obstacle_checks import exact_flat
+    dp, modes = _flat_on_obstacle(monkeypatch)
+    zeros = np.zeros(len(dp.x))
+    guess = Equilibrium(0.0, False, [1e-9], dp.x.copy(), zeros, zeros.copy(), 1e-3,
+                        "inaccurate", float(dp.P), -1.0, float(dp.W))
+    calls = []
+    out = exact_flat(dp, modes, [guess], lambda s: calls.append(s) or (True, 2.0, True), S=1.0)
+    assert calls and [(e.stable, e.status) for e in out] == [(True, "optimal")]

@@ -244,8 +244,8 @@ def exact_flat(dp, modes, out, classify, relabel: bool = False, S: float = 0.0) 
     7.7e-12 m, stationarity 9.4e-6), their amplitude rows' multipliers taking
     up the residual.  Where none is listed it is added, its stability from
     ``classify(s)`` -> ``(stable, curvature[, known])`` at ``s = 0`` (also
-    where the entries reported as w = 0 disagree; where not ``known``, the
-    entry is ``inaccurate``): without load at gap 0 an unstable equilibrium
+    where the entries reported as w = 0 disagree or one is not ``optimal``;
+    where not ``known``, the entry is ``inaccurate``): without load at gap 0 an unstable equilibrium
     the searches missed (P4, two modes; P1, one), lifting off along the first
     mode lowering the energy.  ``relabel``: the
     stability is ``classify``'s also where a listed entry is reported as
@@ -289,13 +289,16 @@ def exact_flat(dp, modes, out, classify, relabel: bool = False, S: float = 0.0) 
     energy = float(dp.energy(u0) * dp.E0)
     zeros = np.zeros(len(dp.x))
     if flat:
+        # (an `inaccurate` entry's label may be a guess -- its probes in F''s
+        # round-off -- and would pass as the flat beam's, `optimal`: a review)
+        guessed = any(e.status != "optimal" for e in flat)
         keep = flat[0]
         keep.w, keep.slope, keep.energy = zeros, zeros.copy(), energy
         keep.amplitudes, keep.residual, keep.status = [0.0] * modes.k, 0.0, "optimal"
         keep.whole_beam = False
         if decided is not None:
             keep.stable, keep.curvature = bool(decided), math.nan
-        elif relabel or len({e.stable for e in flat}) > 1:
+        elif relabel or guessed or len({e.stable for e in flat}) > 1:
             stable, curvature, *known = classify(np.zeros(modes.k))
             keep.stable, keep.curvature = bool(stable), float(curvature)
             if not all(known):   # (the probes' F' round-off: the label is not known)

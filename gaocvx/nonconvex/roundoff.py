@@ -16,8 +16,8 @@ import math
 
 import numpy as np
 
-__all__ = ["round_off", "settled", "widened", "noise_clusters", "NOISE", "LABEL_NOISE",
-           "MERGE_NOISE", "EPS"]
+__all__ = ["round_off", "label_threshold", "settled", "widened", "noise_clusters", "NOISE",
+           "LABEL_NOISE", "MERGE_NOISE", "EPS"]
 
 # F''s round-off at a slice: NOISE eps_mach times its energy scale (the sum of
 # |energy parts|) over the beam's size in the modes' norm (:func:`round_off`): F'
@@ -48,6 +48,25 @@ def round_off(dp, u, t) -> float:
         return 0.0
     size = max(abs(t), math.sqrt(max(float(u @ (dp.G @ u)), 0.0)))
     return NOISE * EPS * own / size if size > 0.0 else math.inf
+
+
+def label_threshold(dp, dtol, c, S):
+    """``noise(t, u)`` for the stability probes: F' counts beyond ``LABEL_NOISE``
+    eps own / size (:func:`round_off`) and beyond the slices' accuracy as the sign
+    bound takes it, ``dtol`` of the concave part's ``2 c S``.
+
+    F' at a probe is known to ``dtol (2 c S + |F'|)`` (:mod:`.completeness`), so
+    it exceeds that only where ``|F'| > dtol 2 c S / (1 - dtol)``.  (A slice
+    error of half that reverses the slope 1e-6 S either side of a degenerate
+    minimum, F' = (s - s0)^3: a unit test.)  At 1e-6 S the label is known where
+    ``|F''| > 2e6 dtol c``: 2e-3 c for the fast slices, 2e-2 c with an obstacle,
+    0.2 c for the dense programs; buckled minima (F'' about 4c) and the flat
+    beam (-2c) pass with room to spare, zeros closer than about
+    ``sqrt(32 dtol c S / (3 a))`` to a fold's partner (F' = a (s - s1)(s - s2))
+    are probed wider, or ``inaccurate``.
+    """
+    accuracy = dtol * 2.0 * c * S / (1.0 - dtol)
+    return lambda t, u: max(LABEL_NOISE / NOISE * round_off(dp, u, t), accuracy)
 
 
 def settled(dF, noise, t) -> bool:

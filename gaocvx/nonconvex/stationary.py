@@ -53,10 +53,10 @@ from ..errors import SceneError, SolverError
 from ..scene import check_solve_arguments, numbers_of, whole
 from .bounds import check_bounded, equilibrium_box, estimate_boxes, zoom_boxes
 from . import stationary1 as line
-from .equilibrium import Equilibrium, check_has_minimum, check_mountain_pass
+from .equilibrium import Equilibrium, check_has_minimum, check_mountain_pass, same_point
 from .images import complete_beams
 from .probes import hessian_stability
-from .roundoff import LABEL_NOISE, NOISE, round_off, settled, widened
+from .roundoff import label_threshold, settled, widened
 from .obstacle_checks import check_contact, exact_flat, global_minimisers
 from .whole_beam import polisher, settle
 from .zooms import own_scale
@@ -73,14 +73,17 @@ GRID = 121
 MAX_GRID = 100_000
 
 
-def flat_classifier(dp, prog, S, lo, hi, out, accuracy=0.0):
+def flat_classifier(dp, prog, S, lo, hi, out, dtol=0.0, c=0.0):
     """``classify(s) -> (stable, curvature, known)`` for the flat beam, ``s = 0``,
     on an obstacle (:func:`.obstacle_checks.exact_flat`), from F' one mode along.
 
-    Probes 1e-6 ``S`` either side (:func:`.stationary1.classify`), widened
-    fourfold while F' at them is round-off (:func:`.roundoff.widened`) or
-    within the slices' ``accuracy``, up to a quarter of the way to the nearest
-    listed equilibrium ``out`` or to the admissible range's end ``lo``, ``hi``;
+    Probes 1e-6 ``S`` either side (:func:`.stationary1.classify`; a quarter of
+    the way to the nearest other listed equilibrium of ``out`` where that is
+    closer), widened fourfold while F' at them is within its round-off or the
+    slices' accuracy ``dtol`` (:func:`.roundoff.label_threshold`, with the
+    concave coefficient ``c``), up to a quarter of the way to that equilibrium
+    or to an end of the admissible range ``lo``, ``hi`` beyond the first probes
+    (a probe past an end is inadmissible, and that side counts as rising);
     ``known`` is False where they never rise above it.  (Fixed at 1e-6 S before,
     as :mod:`.stationary1`'s probes were until F' near P_bar_h, round-off there,
     labelled stable beams unstable.)
@@ -93,14 +96,20 @@ def flat_classifier(dp, prog, S, lo, hi, out, accuracy=0.0):
             cache[t] = (F, float(d[0]), u, ok)
         return cache[t]
 
+    threshold = label_threshold(dp, dtol, c, S)
+
     def probed(t):
-        return settled(dF, lambda t, u: max(LABEL_NOISE / NOISE * round_off(dp, u, t),
-                                            accuracy), t)
+        return settled(dF, threshold, t)
 
     def classify(s):
-        others = [abs(float(e.amplitudes[0])) for e in out if e is not None]
-        cap = min([0.25 * q for q in others if q > 1e-9 * S] + [0.25 * -lo, 0.25 * hi])
-        h, noisy = widened(probed, 0.0, 1e-6 * S, cap)
+        # (entries within MERGE S of s = 0 are the flat beam itself: exact_flat
+        # merges them into it)
+        others = [abs(float(e.amplitudes[0])) for e in out
+                  if e is not None and not same_point(e.amplitudes, 0.0, S)]
+        h = max(min([1e-6 * S] + [0.25 * q for q in others]), 1e-10 * S)
+        ends = [q for q in (-lo, hi) if q > h]
+        cap = min([0.25 * q for q in others + ends] + [0.25 * S])
+        h, noisy = widened(probed, 0.0, h, cap)
         if noisy:
             log.warning("equilibria: F' next to the flat beam is round-off as far as the "
                         "probes reach (%.3g); its stability is not known", h)
@@ -289,8 +298,8 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         if obstacle:
             check_contact(dp, prog, out, polish, S)
         if obstacle and None not in out:
-            classify = flat_classifier(dp, prog, S, float(lo[0]), float(hi[0]), out,
-                                       dtol * 2.0 * float(modes.c[0]) * S)
+            classify = flat_classifier(dp, prog, S, float(lo[0]), float(hi[0]), out, dtol,
+                                       float(modes.c[0]))
             # (the beams near the flat one polished on the whole beam, listed once)
             out = sorted(settle(dp, polish, exact_flat(dp, modes, out, classify, S=S), S,
                                 modes),

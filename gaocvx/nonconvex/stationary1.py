@@ -23,8 +23,8 @@ from ..errors import SceneError
 from .completeness import proven_roots
 from .contours import sampled_roots
 from .equilibrium import Equilibrium, same_point
-from .roundoff import (EPS, LABEL_NOISE, MERGE_NOISE, NOISE, noise_clusters, round_off, settled,
-                       widened)
+from .roundoff import (EPS, LABEL_NOISE, MERGE_NOISE, NOISE, label_threshold, noise_clusters,
+                       round_off, settled, widened)
 
 __all__ = ["classify", "find_line", "ROOT_TOL", "RHO", "DERIVATIVE_TOL", "DENSE_DERIVATIVE_TOL",
            "CONTACT_DERIVATIVE_TOL"]
@@ -279,12 +279,10 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
     if any(len(g) > 1 for g in groups):
         complete = False
 
-    # F' at a probe above its round-off (LABEL_NOISE) and above the slices' own
-    # accuracy as the proof takes it, dtol of the concave part's 2 c S
-    accuracy = dtol * 2.0 * c * S / (1.0 - dtol)
+    threshold = label_threshold(dp, dtol, c, S)
 
-    def probed(t):
-        return settled(dF, lambda t, u: max(LABEL_NOISE / NOISE * noise(t, u), accuracy), t)
+    def probed(t):   # F' at a probe beyond its round-off and the slices' accuracy
+        return settled(dF, threshold, t)
 
     for g in groups:
         # (probes closer than the nearest other zero: a P2 beam 9.8e-10 m into a
@@ -312,7 +310,7 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
         # review); zeros within the energy's round-off of it tie, and the one with the
         # least |F'| is listed (at P_bar_h the flat beam, not a copy 1.8e-10 m off it)
         solved = [q for q in g if dF(q)[2] is not None] or g
-        if len(solved) < len(g):   # (the list is not proven already: any merge)
+        if len(solved) < len(g):   # (the merge marked the list not proven; logged)
             log.warning("equilibria: %d of %d zeros merged at s = %.6g had no slice",
                         len(g) - len(solved), len(g), mid)
         r = solved[0]
