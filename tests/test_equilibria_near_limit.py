@@ -16,6 +16,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+import scipy.linalg as sla
 
 from gaocvx import Scene
 from gaocvx.discrete import DiscreteProblem
@@ -164,7 +165,7 @@ class _Beam:
 
 def test_probes_count_f_prime_only_beyond_the_slices_accuracy():
     """A degenerate minimum of F at s = 0.5, F' = (s - 0.5)^3, and a slice error
-    of half the accuracy the proof allows (dtol of 2 c S = 2e-9) that reverses the
+    of half the accuracy given (probe_tol of 2 c S = 2e-9) that reverses the
     slope next to it: at the probes' 1e-6 S, F' reads -+1e-9 and the minimum was
     labelled unstable.  F' counts only beyond that accuracy (|s - 0.5| > 1.4e-3):
     the probes widen there and the label is the minimum's."""
@@ -172,7 +173,8 @@ def test_probes_count_f_prime_only_beyond_the_slices_accuracy():
     err = 1e-9
     beam = _Beam(lambda t: (t - 0.5) ** 4 / 4 - err * abs(t - 0.5),
                  lambda t: (t - 0.5) ** 3 - err * np.sign(t - 0.5))
-    eqs, _ = find_line(beam, beam, 1.0, np.array([]), 121, -1.0, 1.0, 1.0, 1.0, dtol=1e-9)
+    eqs, _ = find_line(beam, beam, 1.0, np.array([]), 121, -1.0, 1.0, 1.0, 1.0, dtol=1e-9,
+                       probe_tol=1e-9)
     assert len(eqs) == 1 and eqs[0].amplitudes[0] == pytest.approx(0.5, abs=1e-6)
     assert eqs[0].stable
 
@@ -276,3 +278,26 @@ def test_f_prime_scatters_within_its_round_off_estimate(fraction, q):
     # (and not far above it: the labels' and the merging's thresholds are parts of
     # it, LABEL_NOISE / NOISE and MERGE_NOISE / NOISE)
     assert max(ratios) >= 1e-3, ratios
+
+
+def test_a_fold_pair_2e_8_apart_is_labelled_and_optimal():
+    """An imperfect P2 beam (16 elements, P = 300 N) 1e-10 of the load from a
+    fold (q = -6.9360237769 N/m), where the second stable beam and the unstable
+    one between it and the first are born: the pair lies 2.3e-8 m apart.  The
+    Newton slices' F' is known to its round-off, so the probes label the pair,
+    `optimal` (with the sign bound's 1e-9 of 2 c S as the probes' threshold both
+    were `inaccurate`: a trial).  The labels are the independent Hessian's: its
+    least eigenvalue relative to the bending stiffness (5e-6 for the pair: well
+    above its round-off) has the sign of the stability."""
+    d = {"beam": {"model": "gao", "supports": "P2", "length": 0.3, "E": 7e10, "nu": 0.33,
+                  "half_thickness": 0.001, "width": 0.02},
+         "load": {"q": -6.936023776885122, "axial": 300.0}, "mesh": {"elements": 16}}
+    scene = Scene.from_dict(d)
+    eqs = equilibria(scene)
+    assert len(eqs) == 3 and all(e.status == "optimal" for e in eqs)
+    assert [e.stable for e in eqs].count(False) == 1
+    ind = Discrete(scene, max(float(np.max(np.abs(e.w))) for e in eqs))
+    for e in eqs:
+        H = ind.hessian(ind.from_nodal(e.w, e.slope))
+        least = sla.eigh(H, ind.stiffness(), eigvals_only=True)[0]
+        assert abs(least) > 1e-8 and (least > 0) == e.stable, (least, e.stable)

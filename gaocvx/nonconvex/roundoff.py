@@ -52,18 +52,19 @@ def round_off(dp, u, t) -> float:
 
 def label_threshold(dp, dtol, c, S):
     """``noise(t, u)`` for the stability probes: F' counts beyond ``LABEL_NOISE``
-    eps own / size (:func:`round_off`) and beyond the slices' accuracy as the sign
-    bound takes it, ``dtol`` of the concave part's ``2 c S``.
+    eps own / size (:func:`round_off`) and beyond the slices' accuracy ``dtol``
+    relative to the concave part's ``2 c S``.
 
-    F' at a probe is known to ``dtol (2 c S + |F'|)`` (:mod:`.completeness`), so
-    it exceeds that only where ``|F'| > dtol 2 c S / (1 - dtol)``.  (A slice
-    error of half that reverses the slope 1e-6 S either side of a degenerate
-    minimum, F' = (s - s0)^3: a unit test.)  At 1e-6 S the label is known where
-    ``|F''| > 2e6 dtol c``: 2e-3 c for the fast slices, 2e-2 c with an obstacle,
-    0.2 c for the dense programs; buckled minima (F'' about 4c) and the flat
-    beam (-2c) pass with room to spare, zeros closer than about
-    ``sqrt(32 dtol c S / (3 a))`` to a fold's partner (F' = a (s - s1)(s - s2))
-    are probed wider, or ``inaccurate``.
+    F' known to ``dtol (2 c S + |F'|)`` exceeds its error only where ``|F'| >
+    dtol 2 c S / (1 - dtol)``.  (A slice error of half that reverses the slope
+    1e-6 S either side of a degenerate minimum, F' = (s - s0)^3: a unit test.)
+    At 1e-6 S the label is then known where ``|F''| > 2e6 dtol c``; zeros
+    closer than about ``sqrt(32 dtol c S / (3 a))`` to a fold's partner (F' =
+    a (s - s1)(s - s2)) are probed wider, or ``inaccurate``.  The dense programs
+    (interior-point duals, ``dtol`` 1e-7: 0.2 c) take it; the Newton slices,
+    whose F' scatters within its round-off, take ``dtol = 0`` (the sign bound's
+    1e-9 and 1e-8 are margins: with them correct labels of fold pairs 2e-7 m
+    apart, 1e-8 of the load from the fold, became `inaccurate` -- a trial).
     """
     accuracy = dtol * 2.0 * c * S / (1.0 - dtol)
     return lambda t, u: max(LABEL_NOISE / NOISE * round_off(dp, u, t), accuracy)

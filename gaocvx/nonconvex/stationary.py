@@ -73,14 +73,14 @@ GRID = 121
 MAX_GRID = 100_000
 
 
-def flat_classifier(dp, prog, S, lo, hi, out, dtol=0.0, c=0.0):
+def flat_classifier(dp, prog, S, lo, hi, out, probe_tol=0.0, c=0.0):
     """``classify(s) -> (stable, curvature, known)`` for the flat beam, ``s = 0``,
     on an obstacle (:func:`.obstacle_checks.exact_flat`), from F' one mode along.
 
     Probes 1e-6 ``S`` either side (:func:`.stationary1.classify`; a quarter of
     the way to the nearest other listed equilibrium of ``out`` where that is
     closer), widened fourfold while F' at them is within its round-off or the
-    slices' accuracy ``dtol`` (:func:`.roundoff.label_threshold`, with the
+    slices' accuracy ``probe_tol`` (:func:`.roundoff.label_threshold`, with the
     concave coefficient ``c``), up to a quarter of the way to that equilibrium
     or to an end of the admissible range ``lo``, ``hi`` beyond the first probes
     (a probe past an end is inadmissible, and that side counts as rising);
@@ -96,7 +96,7 @@ def flat_classifier(dp, prog, S, lo, hi, out, dtol=0.0, c=0.0):
             cache[t] = (F, float(d[0]), u, ok)
         return cache[t]
 
-    threshold = label_threshold(dp, dtol, c, S)
+    threshold = label_threshold(dp, probe_tol, c, S)
 
     def probed(t):
         return settled(dF, threshold, t)
@@ -111,8 +111,9 @@ def flat_classifier(dp, prog, S, lo, hi, out, dtol=0.0, c=0.0):
         cap = min([0.25 * q for q in others + ends] + [0.25 * S])
         h, noisy = widened(probed, 0.0, h, cap)
         if noisy:
-            log.warning("equilibria: F' next to the flat beam is round-off as far as the "
-                        "probes reach (%.3g); its stability is not known", h)
+            log.warning("equilibria: F' next to the flat beam is within its round-off or the "
+                        "slices' accuracy as far as the probes reach (%.3g); its stability "
+                        "is not known", h)
         stable, curvature = line.classify(dF, 0.0, h)
         return stable, curvature, not noisy
     return classify
@@ -252,6 +253,9 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         lo, hi = np.maximum(lo, smin), np.minimum(hi, smax)
     dtol = (line.DENSE_DERIVATIVE_TOL if not fast else
             line.CONTACT_DERIVATIVE_TOL if obstacle else line.DERIVATIVE_TOL)
+    # (the stability probes: the dense programs' accuracy; the Newton slices' F'
+    # is known to its round-off, roundoff.label_threshold)
+    probe_tol = dtol if not fast else 0.0
     if modes.k == 2:
         from .stationary2 import find_plane
         glob = global_minimisers(dp, modes) if obstacle else []
@@ -290,7 +294,7 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                                 + [np.linspace(a[0], b[0], grid) for a, b in boxes])
         out, complete = line.find_line(
             dp, prog, S, points, grid, float(lo[0]), float(hi[0]), scene_energy(dp, modes),
-            float(modes.c[0]), polish, dtol=dtol)
+            float(modes.c[0]), polish, dtol=dtol, probe_tol=probe_tol)
     if complete is not None:
         # (the proof rests on F + c s^2 being convex: c from the verified modes)
         complete = complete and bool(modes.verified)
@@ -298,7 +302,7 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         if obstacle:
             check_contact(dp, prog, out, polish, S)
         if obstacle and None not in out:
-            classify = flat_classifier(dp, prog, S, float(lo[0]), float(hi[0]), out, dtol,
+            classify = flat_classifier(dp, prog, S, float(lo[0]), float(hi[0]), out, probe_tol,
                                        float(modes.c[0]))
             # (the beams near the flat one polished on the whole beam, listed once)
             out = sorted(settle(dp, polish, exact_flat(dp, modes, out, classify, S=S), S,

@@ -76,7 +76,7 @@ def classify(dF, r, h) -> tuple:
 
 
 def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
-              dtol=DERIVATIVE_TOL) -> tuple:
+              dtol=DERIVATIVE_TOL, probe_tol=0.0) -> tuple:
     """The equilibria with amplitudes in ``[lo, hi]`` and the proof that none is missed.
 
     Parameters
@@ -102,6 +102,10 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
         Polishes a zero on the whole beam (:func:`.whole_beam.polisher`).
     dtol : float
         F''s accuracy relative to its local size, as the proof takes it.
+    probe_tol : float
+        The accuracy the stability probes' F' must clear, relative to ``2 c S``
+        (:func:`.roundoff.label_threshold`): the dense programs' ``dtol``; 0 for
+        the Newton slices, known to their round-off.
 
     Returns
     -------
@@ -279,7 +283,7 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
     if any(len(g) > 1 for g in groups):
         complete = False
 
-    threshold = label_threshold(dp, dtol, c, S)
+    threshold = label_threshold(dp, probe_tol, c, S)
 
     def probed(t):   # F' at a probe beyond its round-off and the slices' accuracy
         return settled(dF, threshold, t)
@@ -325,8 +329,9 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
             out.append(None)   # (the caller's: the list is incomplete)
             continue
         if noisy:
-            log.warning("equilibria: F' at the zero s = %.6g is round-off as far as the "
-                        "probes reach (%.3g); its stability is not known", r, h)
+            log.warning("equilibria: F' at the zero s = %.6g is within its round-off or the "
+                        "slices' accuracy as far as the probes reach (%.3g); its stability "
+                        "is not known", r, h)
         # (an inadmissible probe counts as rising only at an end of the range:
         # inside it the slice failed, and the stability is not known)
         undecided = any(not math.isfinite(dF(t)[0]) and not at_an_end(t)
