@@ -245,9 +245,9 @@ def exact_flat(dp, modes, out, classify, relabel: bool = False, S: float = 0.0) 
     up the residual.  Where none is listed it is added, its stability from
     ``classify(s)`` -> ``(stable, curvature[, known])`` at ``s = 0`` (also
     where the entries reported as w = 0 disagree or one is not ``optimal``;
-    where not ``known``, the entry is ``inaccurate``): without load at gap 0 an unstable equilibrium
-    the searches missed (P4, two modes; P1, one), lifting off along the first
-    mode lowering the energy.  ``relabel``: the
+    where not ``known``, the entry is ``inaccurate``): without load at gap 0
+    an unstable equilibrium the searches missed (P4, two modes; P1, one),
+    lifting off along the first mode lowering the energy.  ``relabel``: the
     stability is ``classify``'s also where a listed entry is reported as
     w = 0 (two modes: the entry's label came from probes that do not see the
     kink of F at w = 0 -- central differences and 16 directions, or 8 probes
