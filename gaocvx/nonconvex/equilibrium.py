@@ -42,11 +42,12 @@ def global_minima(eqs) -> list:
     limit the total is far smaller (a P4 beam without load at 1.000001 P_bar_h,
     12 elements: -1.665e-5 J, the images 3.1e-14 J apart, 1.9e-9 of the total).
 
-    Only a stable equilibrium can be one (a global minimiser is a local one):
-    within about 1e-12 of P_bar_h without load the flat beam, unstable, lies
-    within TIE of the buckled pair and was marked beside them on a path.  Where
-    none is stable (the list is then ``inaccurate``, :func:`check_has_minimum`),
-    the lowest energies are marked.
+    An ``optimal`` unstable equilibrium is not one (a global minimiser is a
+    local one): within about 1e-12 of P_bar_h without load the flat beam,
+    unstable, lies within TIE of the buckled pair and was marked beside them on
+    a path.  An ``inaccurate`` entry may be one whatever its label (a campaign's
+    global minimiser was listed unstable and ``inaccurate``), and where no entry
+    is a candidate all are.
 
     >>> from types import SimpleNamespace as E
     >>> global_minima([E(energy=-1.0, energy_scale=1e6, stable=True),
@@ -57,26 +58,40 @@ def global_minima(eqs) -> list:
     """
     if not eqs:
         return []
-    stable = [e for e in eqs if e.stable] or eqs
-    lowest = min(e.energy for e in stable)
-    scale = max(max(abs(e.energy), _finite(getattr(e, "energy_scale", 0.0))) for e in eqs)
-    return [any(e is f for f in stable) and e.energy <= lowest + TIE * scale for e in eqs]
+    candidate = [bool(e.stable) or getattr(e, "status", "optimal") != "optimal" for e in eqs]
+    if not any(candidate):
+        candidate = [True] * len(eqs)
+    lowest = min(e.energy for e, c in zip(eqs, candidate) if c)
+    return [c and e.energy <= lowest + _tie(eqs) for e, c in zip(eqs, candidate)]
+
+
+def _tie(eqs) -> float:
+    """TIE times the list's energy scale: the largest ``|energy|`` or
+    :attr:`Equilibrium.energy_scale`."""
+    return TIE * max(max(abs(e.energy), _finite(getattr(e, "energy_scale", 0.0))) for e in eqs)
 
 
 def check_has_minimum(eqs) -> None:
-    """Without a stable equilibrium in ``eqs``, every entry becomes ``inaccurate`` (in place).
+    """Without a stable equilibrium in ``eqs``, or with an ``optimal`` unstable one
+    lower than every stable one (beyond TIE), every entry becomes ``inaccurate``
+    (in place).
 
     The energy is coercive (a minimiser exists: the thesis's theorem 1.3), and a
-    global minimiser is a stable equilibrium: where none is listed, one is
-    missing or a stability is wrong, and no entry's ``optimal`` can stand for
-    the list.  (At P = P_bar_h exactly, without load, a P4 beam's flat w = 0, a
-    quartic minimum, was listed alone, unstable and `optimal`: the probes saw
-    round-off.)
+    global minimiser is a stable equilibrium, as low as any: where none is
+    listed, or an unstable one lies below it, one is missing or a stability is
+    wrong, and no entry's ``optimal`` can stand for the list.  (At P = P_bar_h
+    exactly, without load, a P4 beam's flat w = 0, a quartic minimum, was
+    listed alone, unstable and `optimal`: the probes saw round-off.)
     """
-    if any(e.stable for e in eqs):
+    stable = [e.energy for e in eqs if e.stable]
+    if not stable:
+        _all_inaccurate(eqs, f"none of the {len(eqs)} equilibria found is stable, but a "
+                             "global minimiser exists and is one")
         return
-    _all_inaccurate(eqs, f"none of the {len(eqs)} equilibria found is stable, but a global "
-                         "minimiser exists and is one")
+    if any(not e.stable and e.status == "optimal" and e.energy < min(stable) - _tie(eqs)
+           for e in eqs):
+        _all_inaccurate(eqs, "an unstable equilibrium lies below every stable one found, but "
+                             "a global minimiser is stable")
 
 
 def check_mountain_pass(eqs) -> None:

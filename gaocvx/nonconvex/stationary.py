@@ -82,8 +82,8 @@ def flat_classifier(dp, prog, S, lo, hi, out, probe_tol=0.0, c=0.0):
     closer), widened fourfold while F' at them is within its round-off or the
     slices' accuracy ``probe_tol`` (:func:`.roundoff.label_threshold`, with the
     concave coefficient ``c``), up to a quarter of the way to that equilibrium
-    or to an end of the admissible range ``lo``, ``hi`` beyond the first probes
-    (a probe past an end is inadmissible, and that side counts as rising);
+    (a probe past an end of the admissible range ``lo``, ``hi`` is
+    inadmissible, and that side counts as rising);
     ``known`` is False where they never rise above it.  (Fixed at 1e-6 S before,
     as :mod:`.stationary1`'s probes were until F' near P_bar_h, round-off there,
     labelled stable beams unstable.)
@@ -106,9 +106,10 @@ def flat_classifier(dp, prog, S, lo, hi, out, probe_tol=0.0, c=0.0):
         # merges them into it)
         others = [abs(float(e.amplitudes[0])) for e in out
                   if e is not None and not same_point(e.amplitudes, 0.0, S)]
-        h = max(min([1e-6 * S] + [0.25 * q for q in others]), 1e-10 * S)
-        ends = [q for q in (-lo, hi) if q > h]
-        cap = min([0.25 * q for q in others + ends] + [0.25 * S])
+        h = min([1e-6 * S] + [0.25 * q for q in others])
+        # (not capped by the range's ends: a probe past one is inadmissible, and
+        # that side counts as rising)
+        cap = min([0.25 * q for q in others] + [0.25 * S])
         h, noisy = widened(probed, 0.0, h, cap)
         if noisy:
             log.warning("equilibria: F' next to the flat beam is within its round-off or the "
