@@ -22,6 +22,7 @@ from gaocvx import Scene
 from gaocvx.discrete import DiscreteProblem
 from gaocvx.nonconvex.equilibrium import check_has_minimum, global_minima
 from gaocvx.nonconvex.stationary import equilibria, flat_classifier
+from gaocvx.nonconvex.stationary1 import memoised
 from gaocvx.nonconvex.roundoff import NOISE, noise_clusters, round_off, settled
 
 from nonconvex_independent import Discrete
@@ -98,7 +99,7 @@ def test_the_flat_beams_probes_widen_past_round_off_that_reverses_the_slope():
     |F'| exceeds LABEL_NOISE eps / |t| (|t| > 2.6e-4 here; the probes land at
     1.02e-3), the label is the minimum's."""
     line = _Line(lambda t: t**3 - 2e-18 * math.copysign(1.0, t))
-    stable, curvature, known = flat_classifier(line, line, 1.0, -1.0, 1.0, [])(np.zeros(1))
+    stable, curvature, known = flat_classifier(line, memoised(line), 1.0, [])(np.zeros(1))
     assert stable and known and curvature > 0
 
 
@@ -108,7 +109,7 @@ def test_the_flat_beams_probes_stop_short_of_a_listed_equilibrium():
     round-off, and the label is not known."""
     line = _Line(lambda t: t**3 - 2e-18 * math.copysign(1.0, t))
     out = [SimpleNamespace(amplitudes=[1e-4])]
-    assert not flat_classifier(line, line, 1.0, -1.0, 1.0, out)(np.zeros(1))[2]
+    assert not flat_classifier(line, memoised(line), 1.0, out)(np.zeros(1))[2]
 
 
 @pytest.mark.parametrize("lo", [-1e-7, -3e-6])
@@ -119,7 +120,7 @@ def test_the_flat_beams_probes_widen_on_the_side_that_is_admissible(lo):
     way to that end, below the first probe, the probes could not widen, and the
     flat beam's label was not known: reviews.)"""
     line = _Line(lambda t: t**3 - 2e-18 * math.copysign(1.0, t), lo=lo)
-    stable, curvature, known = flat_classifier(line, line, 1.0, lo, 1.0, [])(np.zeros(1))
+    stable, curvature, known = flat_classifier(line, memoised(line), 1.0, [])(np.zeros(1))
     assert stable and known
 
 
@@ -128,7 +129,7 @@ def test_the_flat_beams_probes_leave_out_entries_that_are_the_flat_beam():
     merged into it: it does not cap the probes, which widen past round-off."""
     line = _Line(lambda t: t**3 - 2e-18 * math.copysign(1.0, t))
     out = [SimpleNamespace(amplitudes=[5e-7])]
-    stable, curvature, known = flat_classifier(line, line, 1.0, -1.0, 1.0, out)(np.zeros(1))
+    stable, curvature, known = flat_classifier(line, memoised(line), 1.0, out)(np.zeros(1))
     assert stable and known
 
 
@@ -136,7 +137,7 @@ def test_the_flat_beams_probes_stay_at_one_millionth_where_f_prime_is_clear():
     """F' = -t (a maximum of F) is far above round-off at 1e-6 S: unstable, known,
     from the three solves the fixed probes took (s = 0 and 1e-6 S either side)."""
     line = _Line(lambda t: -t)
-    stable, curvature, known = flat_classifier(line, line, 1.0, -1.0, 1.0, [])(np.zeros(1))
+    stable, curvature, known = flat_classifier(line, memoised(line), 1.0, [])(np.zeros(1))
     assert not stable and known and curvature == pytest.approx(-1.0)
     assert line.solves == 3
 

@@ -61,8 +61,8 @@ def global_minima(eqs) -> list:
     candidate = [bool(e.stable) or getattr(e, "status", "optimal") != "optimal" for e in eqs]
     if not any(candidate):
         candidate = [True] * len(eqs)
-    lowest = min(e.energy for e, c in zip(eqs, candidate) if c)
-    return [c and e.energy <= lowest + _tie(eqs) for e, c in zip(eqs, candidate)]
+    top = min(e.energy for e, c in zip(eqs, candidate) if c) + _tie(eqs)
+    return [c and e.energy <= top for e, c in zip(eqs, candidate)]
 
 
 def _tie(eqs) -> float:
@@ -88,8 +88,8 @@ def check_has_minimum(eqs) -> None:
         _all_inaccurate(eqs, f"none of the {len(eqs)} equilibria found is stable, but a "
                              "global minimiser exists and is one")
         return
-    if any(not e.stable and e.status == "optimal" and e.energy < min(stable) - _tie(eqs)
-           for e in eqs):
+    below = min(stable) - _tie(eqs)
+    if any(not e.stable and e.status == "optimal" and e.energy < below for e in eqs):
         _all_inaccurate(eqs, "an unstable equilibrium lies below every stable one found, but "
                              "a global minimiser is stable")
 

@@ -50,10 +50,11 @@ def round_off(dp, u, t) -> float:
     return NOISE * EPS * own / size if size > 0.0 else math.inf
 
 
-def label_threshold(dp, dtol, c, S):
+def label_threshold(noise, dtol, c, S):
     """``noise(t, u)`` for the stability probes: F' counts beyond ``LABEL_NOISE``
-    eps own / size (:func:`round_off`) and beyond the slices' accuracy ``dtol``
-    relative to the concave part's ``2 c S``.
+    eps own / size (``noise(t, u)``, :func:`round_off` there, is ``NOISE`` eps
+    own / size) and beyond the slices' accuracy ``dtol`` relative to the
+    concave part's ``2 c S``.
 
     F' known to ``dtol (2 c S + |F'|)`` exceeds its error only where ``|F'| >
     dtol 2 c S / (1 - dtol)``.  (A slice error of half that reverses the slope
@@ -67,7 +68,7 @@ def label_threshold(dp, dtol, c, S):
     apart, 1e-8 of the load from the fold, became `inaccurate` -- a trial).
     """
     accuracy = dtol * 2.0 * c * S / (1.0 - dtol)
-    return lambda t, u: max(LABEL_NOISE / NOISE * round_off(dp, u, t), accuracy)
+    return lambda t, u: max(LABEL_NOISE / NOISE * noise(t, u), accuracy)
 
 
 def settled(dF, noise, t) -> bool:

@@ -56,7 +56,7 @@ from . import stationary1 as line
 from .equilibrium import Equilibrium, check_has_minimum, check_mountain_pass, same_point
 from .images import complete_beams
 from .probes import hessian_stability
-from .roundoff import label_threshold, settled, widened
+from .roundoff import label_threshold, round_off, settled, widened
 from .obstacle_checks import check_contact, exact_flat, global_minimisers
 from .whole_beam import polisher, settle
 from .zooms import own_scale
@@ -73,30 +73,22 @@ GRID = 121
 MAX_GRID = 100_000
 
 
-def flat_classifier(dp, prog, S, lo, hi, out, probe_tol=0.0, c=0.0):
+def flat_classifier(dp, dF, S, out, probe_tol=0.0, c=0.0):
     """``classify(s) -> (stable, curvature, known)`` for the flat beam, ``s = 0``,
-    on an obstacle (:func:`.obstacle_checks.exact_flat`), from F' one mode along.
+    on an obstacle (:func:`.obstacle_checks.exact_flat`), from F' one mode along
+    (``dF``, the memoised reduced function of :func:`.stationary1.memoised`).
 
     Probes 1e-6 ``S`` either side (:func:`.stationary1.classify`; a quarter of
     the way to the nearest other listed equilibrium of ``out`` where that is
     closer), widened fourfold while F' at them is within its round-off or the
     slices' accuracy ``probe_tol`` (:func:`.roundoff.label_threshold`, with the
     concave coefficient ``c``), up to a quarter of the way to that equilibrium
-    (a probe past an end of the admissible range ``lo``, ``hi`` is
-    inadmissible, and that side counts as rising);
-    ``known`` is False where they never rise above it.  (Fixed at 1e-6 S before,
-    as :mod:`.stationary1`'s probes were until F' near P_bar_h, round-off there,
-    labelled stable beams unstable.)
+    (a probe past an end of the admissible range is inadmissible, and that side
+    counts as rising); ``known`` is False where they never rise above it.
+    (Fixed at 1e-6 S before, as :mod:`.stationary1`'s probes were until F' near
+    P_bar_h, round-off there, labelled stable beams unstable.)
     """
-    cache = {}
-
-    def dF(t):   # (one solve per probe)
-        if t not in cache:
-            F, d, u, ok = prog.reduced([t])
-            cache[t] = (F, float(d[0]), u, ok)
-        return cache[t]
-
-    threshold = label_threshold(dp, probe_tol, c, S)
+    threshold = label_threshold(lambda t, u: round_off(dp, u, t), probe_tol, c, S)
 
     def probed(t):
         return settled(dF, threshold, t)
@@ -293,9 +285,10 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                                                      if obstacle else [])
         points = np.concatenate([np.asarray(seeds, float) / dp.W]
                                 + [np.linspace(a[0], b[0], grid) for a, b in boxes])
+        reduced = line.memoised(prog)
         out, complete = line.find_line(
             dp, prog, S, points, grid, float(lo[0]), float(hi[0]), scene_energy(dp, modes),
-            float(modes.c[0]), polish, dtol=dtol, probe_tol=probe_tol)
+            float(modes.c[0]), polish, dtol=dtol, probe_tol=probe_tol, dF=reduced)
     if complete is not None:
         # (the proof rests on F + c s^2 being convex: c from the verified modes)
         complete = complete and bool(modes.verified)
@@ -303,8 +296,8 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         if obstacle:
             check_contact(dp, prog, out, polish, S)
         if obstacle and None not in out:
-            classify = flat_classifier(dp, prog, S, float(lo[0]), float(hi[0]), out, probe_tol,
-                                       float(modes.c[0]))
+            # (sharing find_line's solves: s = 0 and the probes it made)
+            classify = flat_classifier(dp, reduced, S, out, probe_tol, float(modes.c[0]))
             # (the beams near the flat one polished on the whole beam, listed once)
             out = sorted(settle(dp, polish, exact_flat(dp, modes, out, classify, S=S), S,
                                 modes),

@@ -75,8 +75,26 @@ def classify(dF, r, h) -> tuple:
     return bool(right[1] > 0 if fr else left[1] < 0), curvature
 
 
+def memoised(prog):
+    """``dF(s) -> (F, F', u, ok)`` at a scalar amplitude ``s``, ``prog.reduced([s])``
+    solved once per ``s``; the solves are kept in ``dF.cache`` (the grid, the
+    bisections and the stability probes, of :func:`find_line` and of
+    :func:`.stationary.flat_classifier`, share them).
+    """
+    cache = {}
+
+    def dF(s):
+        if s not in cache:
+            F, d, u, ok = prog.reduced([s])
+            cache[s] = (F, float(d[0]), u, ok)
+        return cache[s]
+
+    dF.cache = cache
+    return dF
+
+
 def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
-              dtol=DERIVATIVE_TOL, probe_tol=0.0) -> tuple:
+              dtol=DERIVATIVE_TOL, probe_tol=0.0, dF=None) -> tuple:
     """The equilibria with amplitudes in ``[lo, hi]`` and the proof that none is missed.
 
     Parameters
@@ -106,6 +124,9 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
         The accuracy the stability probes' F' must clear, relative to ``2 c S``
         (:func:`.roundoff.label_threshold`): the dense programs' ``dtol``; 0 for
         the Newton slices, known to their round-off.
+    dF : callable, optional
+        ``prog``'s reduced function memoised (:func:`memoised`), to share its
+        solves with the caller; a new one by default.
 
     Returns
     -------
@@ -117,13 +138,8 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
         included.
     """
     t0 = time.perf_counter()
-    cache = {}
-
-    def dF(s):
-        if s not in cache:
-            F, d, u, ok = prog.reduced([s])
-            cache[s] = (F, float(d[0]), u, ok)
-        return cache[s]
+    dF = memoised(prog) if dF is None else dF
+    cache = dF.cache
 
     def at_an_end(t):
         # With one mode the admissible amplitudes are the interval [lo, hi] (the
@@ -283,7 +299,7 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
     if any(len(g) > 1 for g in groups):
         complete = False
 
-    threshold = label_threshold(dp, probe_tol, c, S)
+    threshold = label_threshold(noise, probe_tol, c, S)
 
     def probed(t):   # F' at a probe beyond its round-off and the slices' accuracy
         return settled(dF, threshold, t)
