@@ -21,7 +21,7 @@ from conftest import TRIAL_EULER, trial_eb_toml
 import gaocvx.nonconvex.stationary as stationary
 from gaocvx import Scene, SceneError, SolverError, solve
 from gaocvx.cli import main
-from gaocvx.nonconvex import equilibria, equilibrium_path
+from gaocvx.nonconvex import EquilibriumPath, equilibria, equilibrium_path
 
 # The P4 Gao beam of the path doctest with a load: P_bar_h ~ 1.04e9 N, three equilibria
 # above it at 1.5e9 N (none mirror images: q != 0).
@@ -249,3 +249,46 @@ def test_mirror_minima_just_above_the_limit_are_both_global():
     assert not any(p["global"] for p in pts if not p["stable"])
     r = solve(Scene.from_dict({**data, "load": {"axial": P}}), "global")
     assert r.status == "optimal" and r.extra["global"]["unique"] is False
+
+
+def _point(P, w_c, stable):
+    return {"P": P, "w_c": w_c, "stable": stable}
+
+
+def test_a_pitchfork_links_the_flat_beam_to_both_mirror_images():
+    """Without load the flat beam (w_c = 0) is stable below the limit, and above it
+    the buckled beams w and -w are (w -> -w leaves the energy unchanged), with
+    w = 0 unstable: the stable branch forks into both images.  (Linked to the
+    nearer one only, the other image was a lone point; the images' computed
+    w_c differ by round-off, 1.3e-6 relative just above P_bar_h.)"""
+    a = 1.7e-3
+    path = EquilibriumPath(P=[1.0, 2.0], x_c=0.5, points=[
+        _point(1.0, 0.0, True),
+        _point(2.0, -a, True), _point(2.0, a * (1.0 + 1.3e-6), True), _point(2.0, 0.0, False)])
+    branches = sorted([[(p["P"], p["w_c"]) for p in br] for br in path.branches()])
+    assert branches == [[(1.0, 0.0), (2.0, -a)], [(1.0, 0.0), (2.0, a * (1.0 + 1.3e-6))],
+                        [(2.0, 0.0)]]
+
+
+def test_no_pitchfork_where_the_two_beams_are_no_mirror_images():
+    """Beams at +1 mm and -0.4 mm after a flat one (an obstacle's pressed beam and a
+    free one): the flat beam continues into the nearer only."""
+    path = EquilibriumPath(P=[1.0, 2.0], x_c=0.5, points=[
+        _point(1.0, 0.0, True), _point(2.0, -4e-4, True), _point(2.0, 1e-3, True)])
+    branches = sorted([[(p["P"], p["w_c"]) for p in br] for br in path.branches()])
+    assert branches == [[(1.0, 0.0), (2.0, -4e-4)], [(2.0, 1e-3)]]
+
+
+def test_an_unloaded_beams_path_forks_at_the_limit():
+    """An unloaded P4 aluminium beam (4 elements, P_bar_h = 1.555e5 N): flat and
+    stable at 1.4e5 N; at 1.6e5 and 1.8e5 N two stable mirror images (w -> -w)
+    and the unstable flat beam.  Both images' branches start at the flat beam."""
+    data = {"beam": {"model": "gao", "supports": "P4", "length": 1.0, "E": 7e10, "nu": 0.33,
+                     "half_thickness": 0.02, "width": 0.05}, "mesh": {"elements": 4}}
+    path = equilibrium_path(data, [1.4e5, 1.6e5, 1.8e5])
+    stable = [br for br in path.branches() if br[0]["stable"]]
+    assert len(stable) == 2
+    assert all([p["P"] for p in br] == [1.4e5, 1.6e5, 1.8e5] for br in stable)
+    assert all(br[0]["w_c"] == 0.0 for br in stable)
+    assert stable[0][-1]["w_c"] == pytest.approx(-stable[1][-1]["w_c"], rel=1e-6)
+    assert stable[0][-1]["w_c"] != 0.0

@@ -45,6 +45,10 @@ __all__ = ["EquilibriumPath", "equilibrium_path", "characteristic_point"]
 
 log = logging.getLogger(__name__)
 
+#: Relative difference of |w_c| within which two equilibria of opposite w_c at one
+#: force count as mirror images (a pitchfork's) in :meth:`EquilibriumPath.branches`.
+MIRROR = 1e-3
+
 
 def characteristic_point(scene, elements=None) -> float:
     """Where the first buckling mode's deflection is largest [m] (the path's default x_c)."""
@@ -131,18 +135,23 @@ class EquilibriumPath:
         """Equilibria joined into branches: each point is linked to the nearest
         (in ``w_c``) equilibrium of the same stability at the previous force,
         on the same side of w_c = 0 or within a fifth of the largest ``|w_c|``.
+        A flat beam (w_c = 0) continued by a pair of mirror images (w_c and
+        -w_c, of its stability: a pitchfork) is linked to both.
 
-        Returns lists of points, each a polyline of one stability.
+        Returns lists of points, each a polyline of one stability; a pitchfork's
+        second branch starts at the flat beam.
         """
         branches = []
         open_ = []
         # A link across w_c = 0 longer than this is no continuation but another
         # branch (an obstacle's pressed branch ends where a free one begins).
-        reach = 0.2 * max((abs(p["w_c"]) for p in self.points), default=0.0)
+        largest = max((abs(p["w_c"]) for p in self.points), default=0.0)
+        reach = 0.2 * largest
         for here in self._by_force().values():
             here = sorted(here, key=lambda p: p["w_c"])
             taken = set()
             new_open = []
+            parents = []   # (point, the point its branch continues)
             for pt in here:
                 best, dist = None, np.inf
                 for i, br in enumerate(open_):
@@ -155,14 +164,37 @@ class EquilibriumPath:
                         best, dist = i, d
                 if best is not None:
                     taken.add(best)
+                    parents.append((pt, open_[best][-1]))
                     open_[best].append(pt)
                     new_open.append(open_[best])
                 else:
                     br = [pt]
                     branches.append(br)
                     new_open.append(br)
+            for br in new_open:
+                if len(br) == 1:
+                    br[:0] = _pitchfork(br[0], parents, 1e-9 * largest)
             open_ = new_open
         return branches
+
+
+def _pitchfork(pt, parents, flat) -> list:
+    """``[the flat beam]`` where ``pt``'s mirror image (``-w_c`` within MIRROR,
+    its stability) continues a flat beam's branch (``|w_c| <= flat``), else ``[]``.
+    (Images 1e-11 of the load above P_bar_h: 1.7e-7 m, their w_c 1.3e-6 apart
+    relative, each polished on its own.)
+
+    (Linked to one image only, the path drew the stable flat beam below P_bar_h
+    running to one buckled beam above it, the other image a lone dot: an
+    unloaded P4 beam's path through the limit.)
+    """
+    if pt["w_c"] == 0.0:
+        return []
+    for image, prev in parents:
+        if (image["stable"] == pt["stable"] and abs(prev["w_c"]) <= flat
+                and abs(image["w_c"] + pt["w_c"]) <= MIRROR * abs(pt["w_c"])):
+            return [prev]
+    return []
 
 
 def equilibrium_path(scene, P_values, elements: int | None = None, x_c: float | None = None,
