@@ -338,3 +338,74 @@ def test_a_fold_pair_is_labelled_and_optimal(case):
         H = ind.hessian(ind.from_nodal(e.w, e.slope))
         least = sla.eigh(H, ind.stiffness(), eigvals_only=True)[0]
         assert abs(least) > 1e-8 and (least > 0) == e.stable, (least, e.stable)
+
+
+class _Plane:
+    """A stand-in two-mode problem for plane_newton.at_roots: the DOFs are the
+    amplitudes themselves (G = I), energy scale 1, F = sum (s_i - a)^4 / 4 minus a
+    round-off of ``err`` |s_i - a| that reverses the slope next to the degenerate
+    minimum at (a, a)."""
+    G, x, E0, P, W = np.eye(2), np.array([0.0, 1.0]), 1.0, 0.0, 1.0
+
+    def __init__(self, a=0.5, err=2e-18):
+        self.a, self.err = a, err
+
+    def grad(self, s):
+        d = np.asarray(s, float) - self.a
+        F = float(np.sum(d**4) / 4 - self.err * np.sum(np.abs(d)))
+        return F, d**3 - self.err * np.sign(d), np.asarray(s, float), True
+
+    def hessian(self, s, h=1e-6):
+        H = np.empty((2, 2))
+        for j in range(2):
+            e = np.zeros(2)
+            e[j] = h
+            H[:, j] = (self.grad(s + e)[1] - self.grad(s - e)[1]) / (2 * h)
+        return 0.5 * (H + H.T)
+
+    def to_physical(self, u):
+        return np.array([0.0, float(u[0])]), np.zeros(2)
+
+    def energy(self, u):
+        return self.grad(u)[0]
+
+    def energy_size(self, u):
+        return 1.0
+
+
+def test_two_mode_probes_widen_past_round_off_that_reverses_the_slope():
+    """The degenerate minimum at (0.5, 0.5): at the probes' 1e-6 S the change of
+    ∇F, 1e-18, is below a round-off of 2e-18 against the slope, and the
+    minimum was labelled unstable and `optimal`.  Widened fourfold until it
+    clears LABEL_NOISE eps own / |r| (6.2e-15: |s_i - 0.5| > 1.3e-5), the label is
+    the minimum's."""
+    from gaocvx.nonconvex.plane_newton import at_roots
+    plane = _Plane()
+    (e,) = at_roots(plane, plane.grad, plane.hessian, [np.array([0.5, 0.5])], 1.0)
+    assert e.stable and e.status == "optimal" and e.curvature > 0
+
+
+def test_two_mode_probes_in_round_off_next_to_another_zero_are_inaccurate():
+    """The same minimum with another zero known 4e-5 S away: the probes may widen to
+    a quarter of that (1e-5), where ∇F's change is still round-off: the label is
+    not known, and the entry is `inaccurate`."""
+    from gaocvx.nonconvex.plane_newton import at_roots
+    plane = _Plane()
+    (e,) = at_roots(plane, plane.grad, plane.hessian, [np.array([0.5, 0.5])], 1.0,
+                    known=[np.array([0.5 + 4e-5, 0.5])])
+    assert e.status == "inaccurate"
+
+
+@pytest.mark.parametrize("slope, known", [(1.0, True), (1e-10, False)])
+def test_two_mode_flat_beams_label_is_known_only_beyond_round_off(slope, known):
+    """The flat beam at a kink of F, pressed (its slice u = (1, 0): round-off
+    LABEL_NOISE eps = 4.4e-15 of ∇F), ∇F = slope s: the slope beside it at the
+    probes' 1e-6 S is 1e-6 (known) or 1e-16 (round-off, not known)."""
+    from gaocvx.nonconvex.stationary2 import flat_classifier
+
+    def grad(s):
+        s = np.asarray(s, float)
+        return float(slope * s @ s / 2), slope * s, np.array([1.0, 0.0]), True
+
+    stable, curvature, is_known = flat_classifier(_Plane(), grad, 1.0)(np.zeros(2))
+    assert stable and is_known == known

@@ -27,6 +27,7 @@ import numpy as np
 
 from .equilibrium import Equilibrium, same_point
 from .probes import curvature as _curvature
+from .roundoff import LABEL_NOISE, NOISE, round_off
 from .stationary1 import ROOT_TOL
 
 __all__ = ["newton", "at_roots", "grid_seeds", "axis"]
@@ -104,12 +105,35 @@ def at_roots(dp, grad, hessian, roots, S, known=(), strict=False, floor=0.0,
             continue
         have.append(r)
         w, slope = dp.to_physical(u)
-        status = "optimal" if ok and res <= ROOT_TOL else "inaccurate"
-        curvature = _curvature(grad, H, r, 1e-6 * S)
+        others = [q for q in list(known) + list(roots) if not same_point(q, r, S)]
+        curvature, noisy = _label(dp, grad, hessian, r, H, u, S, others)
+        status = "optimal" if ok and res <= ROOT_TOL and not noisy else "inaccurate"
         out.append(Equilibrium(float(dp.energy(u) * dp.E0), curvature > 0,
                                [float(x) for x in r], dp.x.copy(), w, slope, res, status,
                                float(dp.P), curvature, float(dp.W)))
     return out
+
+
+def _label(dp, grad, hessian, r, H, u, S, others) -> tuple:
+    """``(curvature, noisy)`` of the zero ``r`` (:func:`.probes.curvature`), from
+    probes 1e-6 ``S`` wide, widened fourfold while the change of ∇F across them,
+    ``|curvature| h``, is within ∇F's round-off (``LABEL_NOISE`` eps own / size,
+    :func:`.roundoff.round_off`), up to a quarter of the way to the nearest of
+    ``others`` (or of ``S``); ``noisy`` where it never clears it (the label is
+    not known), as the one-mode probes (:func:`.roundoff.widened`).
+    """
+    h = 1e-6 * S
+    curvature = _curvature(grad, H, r, h)
+    noise = LABEL_NOISE / NOISE * round_off(dp, u, float(np.linalg.norm(r)))
+    cap = min([0.25 * float(np.linalg.norm(np.asarray(q, float) - r)) for q in others]
+              + [0.25 * S])
+    while not abs(curvature) * h > noise and 4.0 * h <= cap:
+        H = hessian(r, 4.0 * h)
+        if H is None:
+            break
+        h *= 4.0
+        curvature = _curvature(grad, H, r, h)
+    return curvature, not abs(curvature) * h > noise
 
 
 def grid_seeds(grad, axes) -> list:

@@ -106,6 +106,7 @@ from .plane_newton import at_roots as _at_roots, axis as _axis, \
     grid_seeds as _grid_seeds, newton as _newton
 from .polygon import program_polygon
 from .probes import least_rise as _least_rise
+from .roundoff import LABEL_NOISE, NOISE, round_off
 from .stationary1 import RHO
 from .whole_beam import polisher, settle as settle_beams
 
@@ -153,12 +154,12 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
             cache[key] = (F, np.asarray(d, float), u, ok)
         return cache[key]
 
-    def hessian(s):
-        # central differences of the gradient; one-sided next to an edge of the
-        # admissible amplitudes (F = inf and a gradient of zeros beyond it, which
-        # once gave a Newton step of 6e11 from the flat beam at gap 0); None
-        # where neither side is admissible
-        h = 1e-6 * S
+    def hessian(s, h=None):
+        # central differences of the gradient, step h (1e-6 S); one-sided next to
+        # an edge of the admissible amplitudes (F = inf and a gradient of zeros
+        # beyond it, which once gave a Newton step of 6e11 from the flat beam at
+        # gap 0); None where neither side is admissible
+        h = 1e-6 * S if h is None else h
         H = np.empty((2, 2))
         mid = grad(s)
         for j in range(2):
@@ -251,16 +252,7 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
         check_contact(dp, prog, out, polish, S)
         at_global(dp, prog, out, minimisers, lambda s: grad(np.asarray(s, float))[0], S)
         if modes is not None:
-            def classify(s):
-                # w = 0 at a kink of F: the slopes beside it, in directions refined
-                # where they rise least; a fall at 1e-6 S is confirmed at 1e-8 S
-                # (a beam pressed flat may rise over a basin narrower than the
-                # first, then fall: the second decides; below it, round-off does)
-                least = _least_rise(grad, s, 1e-6 * S, kink=True)
-                if not least > 0:
-                    least = max(least, _least_rise(grad, s, 1e-8 * S, kink=True))
-                return least > 0, least
-            out = exact_flat(dp, modes, out, classify, relabel=True, S=S)
+            out = exact_flat(dp, modes, out, flat_classifier(dp, grad, S), relabel=True, S=S)
         if zoom:
             # near the flat beam, a square of the equilibria's own size (:mod:`.zooms`)
             out = zooms.near_flat(partial(find_plane, dp, prog, grid=grid, floor=floor,
@@ -310,3 +302,29 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
     log.info("equilibria (k = 2): %d found from %d seeds, %d solves in %.2f s", len(out),
              len(seeds), len(cache), time.perf_counter() - t0)
     return out
+
+
+def flat_classifier(dp, grad, S):
+    """``classify(s) -> (stable, curvature, known)`` for the flat beam on an
+    obstacle with two modes (:func:`.obstacle_checks.exact_flat`), ``grad`` the
+    search's cached ``(F, ∇F, u, ok)``.
+
+    w = 0 lies at a kink of F: the slopes beside it (:func:`.probes.least_rise`,
+    ``kink``), in directions refined where they rise least; a fall at 1e-6 S is
+    confirmed at 1e-8 S (a beam pressed flat may rise over a basin narrower
+    than the first, then fall: the second decides; below it, round-off does).
+    ``known`` where the slope at the probe, ``|least| h``, clears ∇F's
+    round-off (``LABEL_NOISE`` eps own / size, :func:`.roundoff.round_off`).
+    """
+    def classify(s):
+        h = 1e-6 * S
+        least = _least_rise(grad, s, h, kink=True)
+        if not least > 0:
+            fine = _least_rise(grad, s, 1e-8 * S, kink=True)
+            if fine > least:
+                least, h = fine, 1e-8 * S
+        u = grad(s)[2]
+        noise = 0.0 if u is None else \
+            LABEL_NOISE / NOISE * round_off(dp, u, float(np.linalg.norm(s)))
+        return least > 0, least, abs(least) * h > noise
+    return classify
