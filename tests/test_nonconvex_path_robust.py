@@ -251,8 +251,13 @@ def test_mirror_minima_just_above_the_limit_are_both_global():
     assert r.status == "optimal" and r.extra["global"]["unique"] is False
 
 
-def _point(P, w_c, stable):
-    return {"P": P, "w_c": w_c, "stable": stable}
+def _point(P, w_c, stable, max_abs_w=None):
+    return {"P": P, "w_c": w_c, "stable": stable,
+            "max_abs_w": abs(w_c) if max_abs_w is None else max_abs_w}
+
+
+def _polylines(path):
+    return sorted([[(p["P"], p["w_c"]) for p in br] for br in path.branches()])
 
 
 def test_a_pitchfork_links_the_flat_beam_to_both_mirror_images():
@@ -277,6 +282,42 @@ def test_no_pitchfork_where_the_two_beams_are_no_mirror_images():
         _point(1.0, 0.0, True), _point(2.0, -4e-4, True), _point(2.0, 1e-3, True)])
     branches = sorted([[(p["P"], p["w_c"]) for p in br] for br in path.branches()])
     assert branches == [[(1.0, 0.0), (2.0, -4e-4)], [(2.0, 1e-3)]]
+
+
+def test_a_flat_beam_that_stays_flat_is_no_pitchfork():
+    """The flat beam stable at both forces and a stable pair of mirror images
+    appearing beside it (at folds): the flat beam continues as the flat beam,
+    and the images start branches of their own.  (Linked in the order of w_c,
+    the image at -w_c took the flat beam's branch and the other was joined to
+    it as a pitchfork: a review.)"""
+    a = 1e-3
+    path = EquilibriumPath(P=[1.0, 2.0], x_c=0.5, points=[
+        _point(1.0, 0.0, True), _point(2.0, -a, True), _point(2.0, 0.0, True),
+        _point(2.0, a, True), _point(2.0, -a / 2, False), _point(2.0, a / 2, False)])
+    assert _polylines(path) == [[(1.0, 0.0), (2.0, 0.0)], [(2.0, -a)], [(2.0, -a / 2)],
+                                [(2.0, a / 2)], [(2.0, a)]]
+
+
+def test_a_pitchfork_is_joined_with_the_forces_in_decreasing_order():
+    """The pitchfork's forces given from the top down: branches run in increasing
+    force, and both images are joined to the flat beam.  (In the order given,
+    the flat beam continued one image only: a review.)"""
+    a = 1.7e-3
+    pts = [_point(1.0, 0.0, True), _point(2.0, -a, True), _point(2.0, a, True),
+           _point(2.0, 0.0, False)]
+    up = EquilibriumPath(P=[1.0, 2.0], x_c=0.5, points=pts)
+    down = EquilibriumPath(P=[2.0, 1.0], x_c=0.5, points=pts[1:] + pts[:1])
+    assert _polylines(down) == _polylines(up) == [
+        [(1.0, 0.0), (2.0, -a)], [(1.0, 0.0), (2.0, a)], [(2.0, 0.0)]]
+
+
+def test_no_pitchfork_where_opposite_w_c_are_not_mirror_images():
+    """Beams at w_c = -+1 mm whose largest deflections differ (3 and 1 mm: not
+    each other's mirror image, only their w_c opposite at x_c) after a flat one:
+    no pitchfork."""
+    path = EquilibriumPath(P=[1.0, 2.0], x_c=0.5, points=[
+        _point(1.0, 0.0, True), _point(2.0, -1e-3, True, 3e-3), _point(2.0, 1e-3, True, 1e-3)])
+    assert _polylines(path) == [[(1.0, 0.0), (2.0, -1e-3)], [(2.0, 1e-3)]]
 
 
 def test_an_unloaded_beams_path_forks_at_the_limit():

@@ -132,11 +132,12 @@ class EquilibriumPath:
         return [keys] + [[cell(r.get(k)) for k in keys] for r in self.records()]
 
     def branches(self) -> list:
-        """Equilibria joined into branches: each point is linked to the nearest
-        (in ``w_c``) equilibrium of the same stability at the previous force,
-        on the same side of w_c = 0 or within a fifth of the largest ``|w_c|``.
-        A flat beam (w_c = 0) continued by a pair of mirror images (w_c and
-        -w_c, of its stability: a pitchfork) is linked to both.
+        """Equilibria joined into branches, forces in increasing order: each point
+        is linked to an equilibrium of the same stability at the previous force,
+        on the same side of w_c = 0 or within a fifth of the largest ``|w_c|``,
+        the nearest (in ``w_c``) pairs first.  A flat beam (w_c = 0) continued
+        by a pair of mirror images (w_c and -w_c, of its stability and its
+        ``max_abs_w``: a pitchfork) is linked to both.
 
         Returns lists of points, each a polyline of one stability; a pitchfork's
         second branch starts at the flat beam.
@@ -147,30 +148,30 @@ class EquilibriumPath:
         # branch (an obstacle's pressed branch ends where a free one begins).
         largest = max((abs(p["w_c"]) for p in self.points), default=0.0)
         reach = 0.2 * largest
-        for here in self._by_force().values():
+        for _, here in sorted(self._by_force().items()):
             here = sorted(here, key=lambda p: p["w_c"])
-            taken = set()
+            # (the nearest pairs first: linked in the order of w_c, an image of a
+            # mode-2 pair, w_c 1e-18 at mid-span, took the flat beam's branch
+            # from the flat beam -- a trial's path through lambda_2)
+            links = sorted((abs(br[-1]["w_c"] - pt["w_c"]), j, i)
+                           for j, pt in enumerate(here) for i, br in enumerate(open_)
+                           if br[-1]["stable"] == pt["stable"]
+                           and (abs(br[-1]["w_c"] - pt["w_c"]) <= reach
+                                or br[-1]["w_c"] * pt["w_c"] >= 0))
+            linked = {}
+            for _, j, i in links:
+                if j not in linked and i not in linked.values():
+                    linked[j] = i
+            parents = [(here[j], open_[i][-1]) for j, i in linked.items()]
             new_open = []
-            parents = []   # (point, the point its branch continues)
-            for pt in here:
-                best, dist = None, np.inf
-                for i, br in enumerate(open_):
-                    last = br[-1]
-                    if i in taken or last["stable"] != pt["stable"]:
-                        continue
-                    d = abs(last["w_c"] - pt["w_c"])
-                    same_side = last["w_c"] * pt["w_c"] >= 0
-                    if d < dist and (d <= reach or same_side):
-                        best, dist = i, d
-                if best is not None:
-                    taken.add(best)
-                    parents.append((pt, open_[best][-1]))
-                    open_[best].append(pt)
-                    new_open.append(open_[best])
+            for j, pt in enumerate(here):
+                if j in linked:
+                    br = open_[linked[j]]
+                    br.append(pt)
                 else:
                     br = [pt]
                     branches.append(br)
-                    new_open.append(br)
+                new_open.append(br)
             for br in new_open:
                 if len(br) == 1:
                     br[:0] = _pitchfork(br[0], parents, 1e-9 * largest)
@@ -179,8 +180,9 @@ class EquilibriumPath:
 
 
 def _pitchfork(pt, parents, flat) -> list:
-    """``[the flat beam]`` where ``pt``'s mirror image (``-w_c`` within MIRROR,
-    its stability) continues a flat beam's branch (``|w_c| <= flat``), else ``[]``.
+    """``[the flat beam]`` where ``pt``'s mirror image (``-w_c`` and its
+    ``max_abs_w`` within MIRROR, its stability) continues a flat beam's branch
+    (``|w_c| <= flat``), else ``[]``.
     (Images 1e-11 of the load above P_bar_h: 1.7e-7 m, their w_c 1.3e-6 apart
     relative, each polished on its own.)
 
@@ -188,11 +190,13 @@ def _pitchfork(pt, parents, flat) -> list:
     running to one buckled beam above it, the other image a lone dot: an
     unloaded P4 beam's path through the limit.)
     """
-    if pt["w_c"] == 0.0:
+    if abs(pt["w_c"]) <= flat:
         return []
     for image, prev in parents:
         if (image["stable"] == pt["stable"] and abs(prev["w_c"]) <= flat
-                and abs(image["w_c"] + pt["w_c"]) <= MIRROR * abs(pt["w_c"])):
+                and abs(image["w_c"] + pt["w_c"]) <= MIRROR * abs(pt["w_c"])
+                and abs(image.get("max_abs_w", 0.0) - pt.get("max_abs_w", 0.0))
+                <= MIRROR * abs(pt.get("max_abs_w", 0.0))):
             return [prev]
     return []
 
