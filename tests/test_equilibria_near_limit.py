@@ -396,16 +396,42 @@ def test_two_mode_probes_in_round_off_next_to_another_zero_are_inaccurate():
     assert e.status == "inaccurate"
 
 
-@pytest.mark.parametrize("slope, known", [(1.0, True), (1e-10, False)])
+class _Flat(_Plane):
+    """``_Plane`` whose energy scale is that of a beam, ``scale |u|^2`` (0 for the
+    flat beam, u = 0), around a zero at s = 0."""
+
+    def __init__(self, scale=1.0, err=2e-18):
+        super().__init__(a=0.0, err=err)
+        self.scale = scale
+
+    def energy_size(self, u):
+        return self.scale * float(np.asarray(u, float) @ np.asarray(u, float))
+
+
+def test_two_mode_probes_take_the_round_off_at_the_probes_not_at_the_zero():
+    """The degenerate minimum at s = 0, energy scale 1e3 |u|^2: round-off 0 at the
+    zero itself, LABEL_NOISE eps 1e3 h at the probes (4.4e-18 at 1e-6 S, above
+    the slope's 1e-18 there and the error 2e-18 that reverses it).  Taken at the
+    zero, the probes never widened and the minimum was labelled unstable and
+    `optimal` (a review)."""
+    from gaocvx.nonconvex.plane_newton import at_roots
+    plane = _Flat(scale=1e3)
+    (e,) = at_roots(plane, plane.grad, plane.hessian, [np.zeros(2)], 1.0)
+    assert e.stable and e.status == "optimal"
+
+
+@pytest.mark.parametrize("slope, known", [(1.0, True), (1e-16, False)])
 def test_two_mode_flat_beams_label_is_known_only_beyond_round_off(slope, known):
-    """The flat beam at a kink of F, pressed (its slice u = (1, 0): round-off
-    LABEL_NOISE eps = 4.4e-15 of ∇F), ∇F = slope s: the slope beside it at the
-    probes' 1e-6 S is 1e-6 (known) or 1e-16 (round-off, not known)."""
+    """The flat beam at a kink of F, its slices u = s (w = 0 at s = 0: round-off 0
+    there) with energy scale |u|^2, ∇F = slope s: at the probes' 1e-6 S the slope
+    beside it, slope h, against the round-off there, LABEL_NOISE eps h (4.4e-21):
+    known for slope 1, round-off for 1e-16.  (Taken at s = 0, the round-off was 0
+    and every label known: a review.)"""
     from gaocvx.nonconvex.stationary2 import flat_classifier
 
     def grad(s):
         s = np.asarray(s, float)
-        return float(slope * s @ s / 2), slope * s, np.array([1.0, 0.0]), True
+        return float(slope * s @ s / 2), slope * s, s.copy(), True
 
-    stable, curvature, is_known = flat_classifier(_Plane(), grad, 1.0)(np.zeros(2))
+    stable, curvature, is_known = flat_classifier(_Flat(), grad, 1.0)(np.zeros(2))
     assert stable and is_known == known

@@ -26,8 +26,7 @@ import math
 import numpy as np
 
 from .equilibrium import Equilibrium, same_point
-from .probes import curvature as _curvature
-from .roundoff import LABEL_NOISE, NOISE, round_off
+from .probes import curvature as _curvature, probe_noise
 from .stationary1 import ROOT_TOL
 
 __all__ = ["newton", "at_roots", "grid_seeds", "axis"]
@@ -117,23 +116,22 @@ def at_roots(dp, grad, hessian, roots, S, known=(), strict=False, floor=0.0,
 def _label(dp, grad, hessian, r, H, u, S, others) -> tuple:
     """``(curvature, noisy)`` of the zero ``r`` (:func:`.probes.curvature`), from
     probes 1e-6 ``S`` wide, widened fourfold while the change of ∇F across them,
-    ``|curvature| h``, is within ∇F's round-off (``LABEL_NOISE`` eps own / size,
-    :func:`.roundoff.round_off`), up to a quarter of the way to the nearest of
+    ``|curvature| h``, is within ∇F's round-off at the probes
+    (:func:`.probes.probe_noise`), up to a quarter of the way to the nearest of
     ``others`` (or of ``S``); ``noisy`` where it never clears it (the label is
     not known), as the one-mode probes (:func:`.roundoff.widened`).
     """
     h = 1e-6 * S
     curvature = _curvature(grad, H, r, h)
-    noise = LABEL_NOISE / NOISE * round_off(dp, u, float(np.linalg.norm(r)))
     cap = min([0.25 * float(np.linalg.norm(np.asarray(q, float) - r)) for q in others]
               + [0.25 * S])
-    while not abs(curvature) * h > noise and 4.0 * h <= cap:
+    while not abs(curvature) * h > probe_noise(dp, grad, r, h) and 4.0 * h <= cap:
         H = hessian(r, 4.0 * h)
         if H is None:
             break
         h *= 4.0
         curvature = _curvature(grad, H, r, h)
-    return curvature, not abs(curvature) * h > noise
+    return curvature, not abs(curvature) * h > probe_noise(dp, grad, r, h)
 
 
 def grid_seeds(grad, axes) -> list:

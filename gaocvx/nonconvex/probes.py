@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-__all__ = ["curvature", "least_rise", "hessian_stability"]
+__all__ = ["curvature", "least_rise", "probe_noise", "hessian_stability"]
 
 
 def curvature(grad, H, s, h) -> float:
@@ -117,6 +117,24 @@ def least_rise(grad, s, h, n: int = 16, fine: int = 64, kink: bool = False) -> f
                                      options=dict(xatol=1e-3 * step, maxiter=40))
             least = min(least, float(res.fun), float(vals[i]))
     return min(least, float(np.min(vals)))
+
+
+def probe_noise(dp, grad, s, h, n: int = 16) -> float:
+    """∇F's round-off at the probes ``s + h e`` of ``n`` directions (those
+    :func:`least_rise` takes first), the largest: ``LABEL_NOISE`` eps own / size
+    (:func:`.roundoff.round_off`) of each probe's beam, as the one-mode probes
+    count F' (:func:`.roundoff.settled`).  At the probes, not at ``s``: the
+    flat beam's slice at ``s = 0`` is w = 0, whose round-off is 0 (a review).
+    """
+    from .roundoff import LABEL_NOISE, NOISE, round_off
+
+    noise = 0.0
+    for t in np.linspace(0.0, 2.0 * math.pi, n, endpoint=False):
+        p = s + h * np.array([math.cos(t), math.sin(t)])
+        F, _, u, _ = grad(p)
+        if math.isfinite(F) and u is not None:
+            noise = max(noise, LABEL_NOISE / NOISE * round_off(dp, u, float(np.linalg.norm(p))))
+    return noise
 
 
 def hessian_stability(dp, u, margin: float = 1e-3):

@@ -105,8 +105,7 @@ from .obstacle_checks import at_global, check_contact, exact_flat
 from .plane_newton import at_roots as _at_roots, axis as _axis, \
     grid_seeds as _grid_seeds, newton as _newton
 from .polygon import program_polygon
-from .probes import least_rise as _least_rise
-from .roundoff import LABEL_NOISE, NOISE, round_off
+from .probes import least_rise as _least_rise, probe_noise
 from .stationary1 import RHO
 from .whole_beam import polisher, settle as settle_beams
 
@@ -313,8 +312,8 @@ def flat_classifier(dp, grad, S):
     ``kink``), in directions refined where they rise least; a fall at 1e-6 S is
     confirmed at 1e-8 S (a beam pressed flat may rise over a basin narrower
     than the first, then fall: the second decides; below it, round-off does).
-    ``known`` where the slope at the probe, ``|least| h``, clears ∇F's
-    round-off (``LABEL_NOISE`` eps own / size, :func:`.roundoff.round_off`).
+    ``known`` where the slope at the probes, ``|least| h``, clears ∇F's
+    round-off there (:func:`.probes.probe_noise`).
     """
     def classify(s):
         h = 1e-6 * S
@@ -323,8 +322,5 @@ def flat_classifier(dp, grad, S):
             fine = _least_rise(grad, s, 1e-8 * S, kink=True)
             if fine > least:
                 least, h = fine, 1e-8 * S
-        u = grad(s)[2]
-        noise = 0.0 if u is None else \
-            LABEL_NOISE / NOISE * round_off(dp, u, float(np.linalg.norm(s)))
-        return least > 0, least, abs(least) * h > noise
+        return least > 0, least, abs(least) * h > probe_noise(dp, grad, s, h)
     return classify
