@@ -45,8 +45,9 @@ __all__ = ["EquilibriumPath", "equilibrium_path", "characteristic_point"]
 
 log = logging.getLogger(__name__)
 
-#: Relative difference of |w_c| within which two equilibria of opposite w_c at one
-#: force count as mirror images (a pitchfork's) in :meth:`EquilibriumPath.branches`.
+#: Relative difference of |w_c| and of ``max_abs_w`` within which two equilibria of
+#: opposite w_c at one force count as mirror images (a pitchfork's) in
+#: :meth:`EquilibriumPath.branches`.
 MIRROR = 1e-3
 
 
@@ -195,8 +196,7 @@ def _pitchfork(pt, parents, flat) -> list:
     for image, prev in parents:
         if (image["stable"] == pt["stable"] and abs(prev["w_c"]) <= flat
                 and abs(image["w_c"] + pt["w_c"]) <= MIRROR * abs(pt["w_c"])
-                and abs(image.get("max_abs_w", 0.0) - pt.get("max_abs_w", 0.0))
-                <= MIRROR * abs(pt.get("max_abs_w", 0.0))):
+                and abs(image["max_abs_w"] - pt["max_abs_w"]) <= MIRROR * pt["max_abs_w"]):
             return [prev]
     return []
 

@@ -105,7 +105,7 @@ def at_roots(dp, grad, hessian, roots, S, known=(), strict=False, floor=0.0,
         have.append(r)
         w, slope = dp.to_physical(u)
         others = [q for q in list(known) + list(roots) if not same_point(q, r, S)]
-        curvature, noisy = _label(dp, grad, hessian, r, H, u, S, others)
+        curvature, noisy = _label(dp, grad, hessian, r, H, S, others)
         status = "optimal" if ok and res <= ROOT_TOL and not noisy else "inaccurate"
         out.append(Equilibrium(float(dp.energy(u) * dp.E0), curvature > 0,
                                [float(x) for x in r], dp.x.copy(), w, slope, res, status,
@@ -113,7 +113,7 @@ def at_roots(dp, grad, hessian, roots, S, known=(), strict=False, floor=0.0,
     return out
 
 
-def _label(dp, grad, hessian, r, H, u, S, others) -> tuple:
+def _label(dp, grad, hessian, r, H, S, others) -> tuple:
     """``(curvature, noisy)`` of the zero ``r`` (:func:`.probes.curvature`), from
     probes 1e-6 ``S`` wide, widened fourfold while the change of ∇F across them,
     ``|curvature| h``, is within ∇F's round-off at the probes
@@ -122,16 +122,16 @@ def _label(dp, grad, hessian, r, H, u, S, others) -> tuple:
     not known), as the one-mode probes (:func:`.roundoff.widened`).
     """
     h = 1e-6 * S
-    curvature = _curvature(grad, H, r, h)
+    curvature, noise = _curvature(grad, H, r, h), probe_noise(dp, grad, r, h)
     cap = min([0.25 * float(np.linalg.norm(np.asarray(q, float) - r)) for q in others]
               + [0.25 * S])
-    while not abs(curvature) * h > probe_noise(dp, grad, r, h) and 4.0 * h <= cap:
+    while not abs(curvature) * h > noise and 4.0 * h <= cap:
         H = hessian(r, 4.0 * h)
         if H is None:
             break
         h *= 4.0
-        curvature = _curvature(grad, H, r, h)
-    return curvature, not abs(curvature) * h > probe_noise(dp, grad, r, h)
+        curvature, noise = _curvature(grad, H, r, h), probe_noise(dp, grad, r, h)
+    return curvature, not abs(curvature) * h > noise
 
 
 def grid_seeds(grad, axes) -> list:

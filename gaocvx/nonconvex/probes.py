@@ -18,6 +18,8 @@ import math
 
 import numpy as np
 
+from .roundoff import LABEL_NOISE, NOISE, round_off
+
 __all__ = ["curvature", "least_rise", "probe_noise", "hessian_stability"]
 
 
@@ -126,8 +128,6 @@ def probe_noise(dp, grad, s, h, n: int = 16) -> float:
     count F' (:func:`.roundoff.settled`).  At the probes, not at ``s``: the
     flat beam's slice at ``s = 0`` is w = 0, whose round-off is 0 (a review).
     """
-    from .roundoff import LABEL_NOISE, NOISE, round_off
-
     noise = 0.0
     for t in np.linspace(0.0, 2.0 * math.pi, n, endpoint=False):
         p = s + h * np.array([math.cos(t), math.sin(t)])
