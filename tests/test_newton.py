@@ -227,6 +227,19 @@ def test_newton_and_convex_agree_on_random_scenes(supports, model, q, force, whe
         assert np.abs(a.w - b.w).max() <= 2e-6 * scale, (a.message, b.message)
 
 
+def test_pressed_beam_below_the_zero_floor_is_polished():
+    """A P1 beam pressed onto an obstacle at gap 0 (found by the random test above): the
+    exact answer is w = 0; the method of multipliers stopped at penalty 1e4 once the
+    certificate, measured against the zero floor, passed, leaving the beam lifted
+    2.4e-6 of the floor.  Polished at the largest penalty it is held to the floor."""
+    scene = compressed_scene(0.5, "P1", "gao", q=0.0, points=[(0.953125, -100.0)],
+                             elements=10, **contact("obstacle", 0.0))
+    a = solve(scene, "newton")
+    floor = ZERO_ANSWER * DiscreteProblem(scene).W_linear
+    assert a.status == "optimal" and "polished" in a.message, a.message
+    assert np.abs(a.w).max() <= 2e-6 * floor
+
+
 def test_auto_falls_back_to_convex_where_newton_cannot_certify():
     """A point contact carrying 3e8 N near a clamp: the method of multipliers stalls short
     of complementarity 1e-12 (found by test_deflection_bound_holds); auto then returns
