@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 from .bnb import components
-from .polish import feasible_energy, polish, reflections
+from .polish import feasible_energy, polish, reflections, zero_floor
 
 __all__ = ["other_minimisers", "NEAR_LEAVES", "DISTINCT"]
 
@@ -69,7 +69,12 @@ def other_minimisers(dp, prog, out, best, lo, hi, tol):
     best_e, best_u, best_s, lam = best
     phi = prog.modes.phi
     basins = getattr(out, "basins", [])
+    # Sizes are at least the certificate's zero floor: below it every deflection is
+    # zero (a P4 beam pressed flat at gap 0 had three polished points of 1e-21 of
+    # it, each "distinct" relative to its own size: not unique was reported).
+    floor = zero_floor(dp)
     norm = lambda x: math.sqrt(max(float(x @ (dp.G @ x)), 0.0))  # noqa: E731
+    size_of = lambda x: max(norm(x), floor)  # noqa: E731
 
     def basin_of(u):
         s = phi.T @ (dp.G @ u)
@@ -97,7 +102,7 @@ def other_minimisers(dp, prog, out, best, lo, hi, tol):
         s2, u2, lam2 = polish(dp, prog, seed.s, seed.u, None, glo, ghi)
         # An exact image of the answer this close is the minimiser the polish was
         # after: it states it exactly (a flat minimum polishes to 1e-6 of its size).
-        size2 = norm(u2)
+        size2 = size_of(u2)
         image = next((x for x in [-best_u] + reflections(dp, best_u)
                       if norm(x - u2) <= IMAGE_MATCH * size2), None)
         if image is not None and feasible(image) <= best_e + tol:
@@ -106,7 +111,7 @@ def other_minimisers(dp, prog, out, best, lo, hi, tol):
         if e2 > best_e + tol:
             continue
         known = [best_u] + [a[1] for a in alternatives]
-        if any(same(u2, x, max(norm(u2), norm(x))) for x in known):
+        if any(same(u2, x, max(size_of(u2), size_of(x))) for x in known):
             continue
         if e2 < best_e:  # the other one is lower: it becomes the answer
             alternatives.append((best_e, best_u, best_s, lam))
@@ -128,7 +133,7 @@ def other_minimisers(dp, prog, out, best, lo, hi, tol):
     # is kept as it is, else the polished point;
     # an exact image replaces a group's polished point in its basin (the same
     # minimiser, which the image states exactly).
-    size = norm(best_u)
+    size = size_of(best_u)
     for u2 in [-best_u] + reflections(dp, best_u):
         e2 = feasible(u2)
         if not e2 <= best_e + tol or same(u2, best_u, size):
