@@ -660,3 +660,22 @@ def test_the_whole_beam_stability_is_the_independent_hessians():
             else:
                 assert abs(least) < 1e-6
     assert seen == {True, False}
+
+
+def test_amplitudes_in_metres_agree_between_solve_equilibria_and_path():
+    """In a channel the global solve and the equilibria list work in different
+    deflection scales (the answer's own, 0.02 m, and the list's, 0.0527 m): one
+    minimiser had non-dimensional amplitudes 2.229 and 0.846.  In metres they are
+    one number, in the JSON of both and of the path."""
+    d = scene_dict("P4", q=None, axial=1.5e9, obstacle=0.01, elements=8)
+    d["obstacle"]["gap_above"] = 0.02
+    scene = Scene.from_dict(d)
+    glob = solve(scene, "global").extra["global"]
+    best = equilibria(scene)[0]
+    assert best.stable and best.energy == pytest.approx(solve(scene, "global").energy, rel=1e-9)
+    assert abs(glob["amplitudes"][0] - best.amplitudes[0]) > 0.5     # different scales
+    assert glob["amplitudes_m"][0] == pytest.approx(best.to_dict()["amplitudes_m"][0], rel=1e-6)
+    point = next(p for p in equilibrium_path(scene, [1.5e9]).points if p["global"])
+    assert point["amplitude_m"] == pytest.approx(glob["amplitudes_m"][0], rel=1e-6)
+    # in metres: the mode's amplitude, of the size of the deflection (4.5 cm here)
+    assert 0.01 < abs(point["amplitude_m"]) < 0.1

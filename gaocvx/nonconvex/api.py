@@ -128,7 +128,12 @@ def solve_global_result(scene, elements=None, problem=None, solver=None):
         # P (within round-off): the first mode is treated as unstable (c_1 ~ 0).
         modes = unstable_modes(dp, min_k=1)
     dp, raw, info = solve_certified(dp, modes)
-    alternatives = [{"energy": a["energy"], "amplitudes": a["amplitudes"], **_physical(dp, a["u"])}
+    # Amplitudes in metres too: the non-dimensional ones are in this answer's own
+    # deflection scale, which differs from an equilibria list's (a channel: 0.02 m
+    # here, 0.0527 m there, and one minimiser's amplitudes 2.229 and 0.846).
+    info["amplitudes_m"] = [a * dp.W for a in info["amplitudes"]]
+    alternatives = [{"energy": a["energy"], "amplitudes": a["amplitudes"],
+                     "amplitudes_m": [s * dp.W for s in a["amplitudes"]], **_physical(dp, a["u"])}
                     for a in info.pop("alternatives")]
     info["alternatives"] = alternatives
     if alternatives:

@@ -257,9 +257,11 @@ class Equilibrium:
         return float(values[0]) if points.ndim == 0 else values.reshape(points.shape)
 
     def to_dict(self) -> dict:
-        """One JSON object: energy, stability, extrema, amplitudes, nodal values."""
+        """One JSON object: energy, stability, extrema, amplitudes (and in metres),
+        nodal values."""
         return {"energy": self.energy, "stability": "stable" if self.stable else "unstable",
                 "P": self.P, "min": self.min, "max": self.max, "amplitudes": self.amplitudes,
-                "status": self.status, "residual": self.residual, "complete": self.complete,
+                "amplitudes_m": self.amplitude_m, "status": self.status,
+                "residual": self.residual, "complete": self.complete,
                 "nodes": {"x": self.x.tolist(), "w": self.w.tolist(),
                           "slope": self.slope.tolist()}}

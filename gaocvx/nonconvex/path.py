@@ -76,8 +76,10 @@ class EquilibriumPath:
     points : list of dict
         One per equilibrium: ``P``, ``w_c`` (deflection at ``x_c``), ``max_abs_w``,
         ``energy`` [J], ``stable``, ``global`` (the global minimiser at its P),
-        ``amplitude``, ``status``, ``complete`` (its force's list proven to miss
-        no equilibrium: :attr:`.Equilibrium.complete`).
+        ``amplitude`` (non-dimensional, in this force's deflection scale),
+        ``amplitude_m`` (in metres: comparable between forces), ``status``,
+        ``complete`` (its force's list proven to miss no equilibrium:
+        :attr:`.Equilibrium.complete`).
     x_c : float
         Where ``w_c`` is taken [m].
     errors : dict
@@ -123,8 +125,9 @@ class EquilibriumPath:
         """CSV rows (header first), one per record of :meth:`records`: booleans as
         ``true``/``false`` (as in the JSON), a missing value (a force's error
         row, an amplitude below the limit) as ``None`` (an empty cell)."""
+        # (amplitude_m last: it came after the others, and columns keep their places)
         keys = ["P", "w_c", "max_abs_w", "energy", "stable", "global", "amplitude", "status",
-                "complete", "error"]
+                "complete", "error", "amplitude_m"]
 
         def cell(value):
             return ("true" if value else "false") if isinstance(value, (bool, np.bool_)) \
@@ -277,6 +280,7 @@ def equilibrium_path(scene, P_values, elements: int | None = None, x_c: float | 
                            "max_abs_w": float(np.max(np.abs(e.w))), "energy": e.energy,
                            "stable": e.stable, "global": best,
                            "amplitude": e.amplitudes[0] if e.amplitudes else None,
+                           "amplitude_m": e.amplitude_m[0] if e.amplitudes else None,
                            "status": e.status, "complete": e.complete})
         # Warm start: the next force samples these amplitudes first (a force
         # with no equilibria passes on the last ones found).
