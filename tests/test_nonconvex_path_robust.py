@@ -16,7 +16,7 @@ import json
 import numpy as np
 import pytest
 
-from conftest import TRIAL_EULER, trial_eb_toml
+from conftest import TRIAL_EULER, scene_dict, trial_eb_toml
 
 import gaocvx.nonconvex.stationary as stationary
 from gaocvx import Scene, SceneError, SolverError, solve
@@ -275,13 +275,14 @@ def test_a_pitchfork_links_the_flat_beam_to_both_mirror_images():
                         [(2.0, 0.0)]]
 
 
-def test_no_pitchfork_where_the_two_beams_are_no_mirror_images():
-    """Beams at +1 mm and -0.4 mm after a flat one (an obstacle's pressed beam and a
-    free one): the flat beam continues into the nearer only."""
+def test_a_pitchfork_onto_an_obstacle_joins_both_beams():
+    """Beams at +1 mm and -0.4 mm after a flat one (unloaded: they left the flat
+    beam together at the buckling load, the one below pressed onto an obstacle
+    0.4 mm under it): both start at the flat beam.  (Only mirror images were
+    joined once, and the beam of a channel's far side was drawn unconnected.)"""
     path = EquilibriumPath(P=[1.0, 2.0], x_c=0.5, points=[
         _point(1.0, 0.0, True), _point(2.0, -4e-4, True), _point(2.0, 1e-3, True)])
-    branches = sorted([[(p["P"], p["w_c"]) for p in br] for br in path.branches()])
-    assert branches == [[(1.0, 0.0), (2.0, -4e-4)], [(2.0, 1e-3)]]
+    assert _polylines(path) == [[(1.0, 0.0), (2.0, -4e-4)], [(1.0, 0.0), (2.0, 1e-3)]]
 
 
 def test_a_flat_beam_that_stays_flat_is_no_pitchfork():
@@ -311,12 +312,11 @@ def test_a_pitchfork_is_joined_with_the_forces_in_decreasing_order():
         [(1.0, 0.0), (2.0, -a)], [(1.0, 0.0), (2.0, a)], [(2.0, 0.0)]]
 
 
-def test_no_pitchfork_where_opposite_w_c_are_not_mirror_images():
-    """Beams at w_c = -+1 mm whose largest deflections differ (3 and 1 mm: not
-    each other's mirror image, only their w_c opposite at x_c) after a flat one:
-    no pitchfork."""
+def test_no_pitchfork_across_stabilities():
+    """A stable flat beam followed by a stable beam at -1 mm and an unstable one at
+    +1 mm: only the stable one continues it (a branch keeps its stability)."""
     path = EquilibriumPath(P=[1.0, 2.0], x_c=0.5, points=[
-        _point(1.0, 0.0, True), _point(2.0, -1e-3, True, 3e-3), _point(2.0, 1e-3, True, 1e-3)])
+        _point(1.0, 0.0, True), _point(2.0, -1e-3, True), _point(2.0, 1e-3, False)])
     assert _polylines(path) == [[(1.0, 0.0), (2.0, -1e-3)], [(2.0, 1e-3)]]
 
 
@@ -333,3 +333,17 @@ def test_an_unloaded_beams_path_forks_at_the_limit():
     assert all(br[0]["w_c"] == 0.0 for br in stable)
     assert stable[0][-1]["w_c"] == pytest.approx(-stable[1][-1]["w_c"], rel=1e-6)
     assert stable[0][-1]["w_c"] != 0.0
+
+
+def test_a_channels_pitchfork_joins_both_surfaces():
+    """An unloaded P4 beam in a channel (1 cm below, 2 cm above; P_bar_h = 1.17e9 N):
+    flat and stable at 1.0e9 N; at 1.2e9 N one stable beam on each surface, no
+    mirror images.  Both stable branches start at the flat beam (a new user's
+    trial drew the upper one unconnected)."""
+    d = scene_dict("P4", q=None, obstacle=0.01, elements=8)
+    d["obstacle"]["gap_above"] = 0.02
+    path = equilibrium_path(d, [1.0e9, 1.2e9])
+    stable = [br for br in path.branches() if br[0]["stable"]]
+    assert len(stable) == 2 and all(br[0]["w_c"] == 0.0 and br[0]["P"] == 1.0e9 for br in stable)
+    ends = sorted(br[-1]["w_c"] for br in stable)
+    assert ends[0] < 0 < ends[1] and abs(ends[0] + ends[1]) > 1e-3   # no mirror images

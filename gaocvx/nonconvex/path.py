@@ -45,10 +45,6 @@ __all__ = ["EquilibriumPath", "equilibrium_path", "characteristic_point"]
 
 log = logging.getLogger(__name__)
 
-#: Relative difference of |w_c| and of ``max_abs_w`` within which two equilibria of
-#: opposite w_c at one force count as mirror images (a pitchfork's) in
-#: :meth:`EquilibriumPath.branches`.
-MIRROR = 1e-3
 
 
 def characteristic_point(scene, elements=None) -> float:
@@ -140,8 +136,10 @@ class EquilibriumPath:
         is linked to an equilibrium of the same stability at the previous force,
         on the same side of w_c = 0 or within a fifth of the largest ``|w_c|``,
         the nearest (in ``w_c``) pairs first.  A flat beam (w_c = 0) continued
-        by a pair of mirror images (w_c and -w_c, of its stability and its
-        ``max_abs_w``: a pitchfork) is linked to both.
+        by two beams of its stability on either side of w_c = 0 (a pitchfork:
+        mirror images, or, where an obstacle or channel breaks the symmetry,
+        the beams that left the flat one at the same buckling load) is linked
+        to both.
 
         Returns lists of points, each a polyline of one stability; a pitchfork's
         second branch starts at the flat beam.
@@ -184,22 +182,24 @@ class EquilibriumPath:
 
 
 def _pitchfork(pt, parents, flat) -> list:
-    """``[the flat beam]`` where ``pt``'s mirror image (``-w_c`` and its
-    ``max_abs_w`` within MIRROR, its stability) continues a flat beam's branch
-    (``|w_c| <= flat``), else ``[]``.
-    (Images 1e-11 of the load above P_bar_h: 1.7e-7 m, their w_c 1.3e-6 apart
-    relative, each polished on its own.)
+    """``[the flat beam]`` where a beam of ``pt``'s stability on the other side of
+    w_c = 0 continues a flat beam's branch (``|w_c| <= flat``), else ``[]``.
 
-    (Linked to one image only, the path drew the stable flat beam below P_bar_h
-    running to one buckled beam above it, the other image a lone dot: an
-    unloaded P4 beam's path through the limit.)
+    Only a flat beam has w_c = 0 to 1e-9 (an unloaded beam: its energy is even
+    in w, so at a buckling load the beams w and -w leave it together).  Linked
+    to one of them only, the path drew the stable flat beam below P_bar_h
+    running to one buckled beam above it, the other a lone dot (an unloaded P4
+    beam's path through the limit).  Mirror images were asked for once; in a
+    channel the two leave the flat beam as images and reach different surfaces
+    (-10 mm and +16 mm one force later), and one was drawn unconnected (a new
+    user's trial).  A flat beam that stays flat keeps its branch, so no beam
+    beside it is joined to it.
     """
     if abs(pt["w_c"]) <= flat:
         return []
     for image, prev in parents:
-        if (image["stable"] == pt["stable"] and abs(prev["w_c"]) <= flat
-                and abs(image["w_c"] + pt["w_c"]) <= MIRROR * abs(pt["w_c"])
-                and abs(image["max_abs_w"] - pt["max_abs_w"]) <= MIRROR * pt["max_abs_w"]):
+        if image["stable"] == pt["stable"] and abs(prev["w_c"]) <= flat \
+                and image["w_c"] * pt["w_c"] < 0:
             return [prev]
     return []
 
