@@ -362,11 +362,23 @@ class Result:
                    else f"{glob['nodes']} nodes")
             lines.append(f"global   {glob['unstable_modes']} unstable mode(s), certified gap "
                          f"{glob['bound_gap']:.3g} J, {how}"
-                         + ("" if glob["unique"] else
-                            f", NOT unique ({len(glob.get('alternatives', [])) + 1} minimisers)"))
+                         + _uniqueness(glob, self.status))
         verdict = self.extra.get("cvm", {}).get("verdict")
         if verdict:  # CVM's status is about its own problem; this is about the beam
             lines.append(f"verdict  {verdict}")
         if not self.success and not verdict:
             lines.append(f"note     {self.message}")
         return "\n".join(lines)
+
+
+def _uniqueness(glob: dict, status: str) -> str:
+    """The summary's word on other minimisers: none where unique; where the gap is not
+    certified (``inaccurate``), candidates only (a P4 beam without load at exactly
+    P_bar_h, stopped at the node limit, had five points 5.7e-9 m from w = 0, its one
+    minimiser, and was said to be "NOT unique")."""
+    if glob["unique"]:
+        return ""
+    n = len(glob.get("alternatives", [])) + 1
+    if status != "optimal":
+        return f", uniqueness not established ({n} candidates; the gap is not certified)"
+    return f", NOT unique ({n} minimisers)"

@@ -7,6 +7,7 @@ minimisation with scipy.optimize written here, and the closed-form one-mode
 amplitude of nonconvex.md.
 """
 
+import json
 import math
 import re
 from pathlib import Path
@@ -470,3 +471,23 @@ def test_mirror_minimiser_reported_just_above_the_limit(eps):
     assert g["unique"] is False and len(g["alternatives"]) == 1
     other = np.asarray(g["alternatives"][0]["w"])
     assert np.abs(other + r.w).max() <= 1e-12 * np.abs(r.w).max()   # its mirror image
+
+
+@pytest.mark.slow
+def test_uncertified_alternatives_are_not_called_minimisers(tmp_path, capsys):
+    """An unloaded P4 beam at exactly its first mode load lambda_1 (the degenerate,
+    quartic minimum at w = 0 that no second-order certificate proves): `inaccurate`,
+    and the other points within the search's gap are candidates, not "NOT unique"
+    minimisers (a new user's trial at 16 elements: five points 5.7e-9 m from w = 0
+    were reported as five minimisers).  About a minute."""
+    d = scene_dict("P4", q=None, axial=1.5e9, elements=6)
+    d["load"]["axial"] = solve(Scene.from_dict(d), "global").extra["global"]["mode_loads"][0]
+    path = tmp_path / "at_lambda1.toml"
+    beam = "\n".join(f"{k} = {json.dumps(v)}" for k, v in d["beam"].items())
+    path.write_text(f'[beam]\n{beam}\n[load]\naxial = {d["load"]["axial"]!r}\n'
+                    f'[mesh]\nelements = 6\n')
+    assert main(["solve", str(path)]) == 1
+    out = capsys.readouterr().out
+    assert "status   inaccurate" in out
+    assert "uniqueness not established" in out and "not unique" not in out.lower()
+    assert "candidates within the search's gap, not certified" in out   # the note: the message

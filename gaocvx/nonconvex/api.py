@@ -136,8 +136,11 @@ def solve_global_result(scene, elements=None, problem=None, solver=None):
                      "amplitudes_m": [s * dp.W for s in a["amplitudes"]], **_physical(dp, a["u"])}
                     for a in info.pop("alternatives")]
     info["alternatives"] = alternatives
-    if alternatives:
+    if alternatives and raw["status"] == "optimal":
         raw["message"] += (f"; not unique: {len(alternatives) + 1} minimisers within the "
                            "certified gap (mirror images or other contact states), all in "
                            "extra['global']['alternatives']")
+    elif alternatives:   # (the gap is not certified: candidates only)
+        raw["message"] += (f"; {len(alternatives) + 1} candidates within the search's gap, "
+                           "not certified, in extra['global']['alternatives']")
     return make_result(dp, raw, "global", time.perf_counter() - t0, extra={"global": info})
