@@ -272,3 +272,13 @@ def test_cli_negative_axial_range_says_how_to_write_it(eb_file, capsys):
     assert "--axial=START:STOP:NUM, e.g. --axial=-1e9:2e9:4" in err
     assert main(["path", str(eb_file), "--axial=-1e4:1e4:3"]) == 0   # the form that parses
     assert capsys.readouterr().out.startswith("# 3 equilibria at 3 axial forces; ")
+
+
+@pytest.mark.parametrize("text, says", [
+    ("1e9:2e9:2.5", "NUM a whole number"),
+    ("1e9:2e9:1", "NUM = 1 traces START only"),    # (STOP was dropped without a word)
+])
+def test_cli_axial_range_errors_say_what_is_wrong(eb_file, capsys, text, says):
+    assert main(["path", str(eb_file), "--axial", text]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: --axial: ") and says in err and text in err

@@ -56,9 +56,13 @@ def parse_range(text: str) -> np.ndarray:
             raise ValueError
         start, stop, num = float(parts[0]), float(parts[1]), int(parts[2])
     except ValueError:
-        raise SceneError("--axial", "must be START:STOP:NUM, e.g. 0:3e9:31", text) from None
+        raise SceneError("--axial", "must be START:STOP:NUM, NUM a whole number, e.g. 0:3e9:31",
+                         text) from None
     if not (np.isfinite(start) and np.isfinite(stop)) or not 1 <= num <= 10000:
         raise SceneError("--axial", "needs finite START and STOP and 1 <= NUM <= 10000", text)
+    if num == 1 and stop != start:   # (linspace would drop STOP without a word)
+        raise SceneError("--axial", "NUM = 1 traces START only: give STOP = START, or NUM >= 2",
+                         text)
     values = np.linspace(start, stop, num)
     if len(np.unique(values)) < num:   # (a path takes each force once)
         raise SceneError("--axial", "repeats a force: START and STOP must differ when NUM > 1, "
