@@ -109,7 +109,7 @@ def equilibria_figure(eqs, scene):
     from ..plot import _pyplot, draw_surfaces, surface_points
 
     plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig, ax = plt.subplots(figsize=(10, 4))
     xs = surface_points(scene)
     span = max([float(np.max(np.abs(e.w))) for e in eqs] + [0.0]) * 1e3 or 1.0
     draw_surfaces(ax, scene, xs, span, scale=1e3)
@@ -125,7 +125,10 @@ def equilibria_figure(eqs, scene):
     ax.set_xlabel("x [m]")
     ax.set_ylabel("w [mm]")
     ax.set_title(f"equilibria at P = {scene.load.axial:.4g} N: {_title(scene)}", fontsize=9)
-    ax.legend(fontsize=8)
+    # Beside the axes: inside, it covered the largest deflection or a channel's
+    # upper surface (a new user's trial), whatever its corner.
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
+    fig.tight_layout()
     return fig
 
 
