@@ -124,9 +124,12 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
     """Every equilibrium of ``scene`` (k <= 2 unstable modes), sorted by energy.
 
     With one unstable mode the zeros of the reduced gradient are bracketed on a
-    grid; with two the plane of amplitudes is sampled (:mod:`.stationary2`: no
-    proof that none is missed; with an obstacle the certified global minimiser
-    is among the starts).
+    grid, and a sign bound proves that none is missed (:mod:`.completeness`);
+    with two the plane of amplitudes is searched (:mod:`.stationary2`: grid
+    seeds, contours and descents; with an obstacle the certified global
+    minimiser is among the starts) and the monotone gradient's ellipses prove
+    that none is missed (:mod:`.completeness2`).  Where a proof fails the list
+    says so (``complete`` below).
 
     Parameters
     ----------
