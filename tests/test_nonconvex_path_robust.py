@@ -335,11 +335,12 @@ def test_an_unloaded_beams_path_forks_at_the_limit():
     assert stable[0][-1]["w_c"] != 0.0
 
 
-def test_a_channels_pitchfork_joins_both_surfaces():
+def test_a_channels_pitchfork_joins_both_sides():
     """An unloaded P4 beam in a channel (1 cm below, 2 cm above; P_bar_h = 1.17e9 N):
-    flat and stable at 1.0e9 N; at 1.2e9 N one stable beam on each surface, no
-    mirror images.  Both stable branches start at the flat beam (a new user's
-    trial drew the upper one unconnected)."""
+    flat and stable at 1.0e9 N; at 1.2e9 N one stable beam on either side, no
+    mirror images (the lower one pressed onto its surface, the upper one free).
+    Both stable branches start at the flat beam (a new user's trial drew the
+    upper one unconnected)."""
     d = scene_dict("P4", q=None, obstacle=0.01, elements=8)
     d["obstacle"]["gap_above"] = 0.02
     path = equilibrium_path(d, [1.0e9, 1.2e9])
@@ -347,3 +348,25 @@ def test_a_channels_pitchfork_joins_both_surfaces():
     assert len(stable) == 2 and all(br[0]["w_c"] == 0.0 and br[0]["P"] == 1.0e9 for br in stable)
     ends = sorted(br[-1]["w_c"] for br in stable)
     assert ends[0] < 0 < ends[1] and abs(ends[0] + ends[1]) > 1e-3   # no mirror images
+
+
+@pytest.mark.parametrize("flat", [1e-20, -1e-20])
+def test_a_flat_beam_that_stays_flat_by_round_off_is_no_pitchfork(flat):
+    """As above, the flat beam's w_c at the second force round-off of either sign
+    (a review: a beam on the other side was joined to it as a second arm)."""
+    a = 1e-3
+    path = EquilibriumPath(P=[1.0, 2.0], x_c=0.5, points=[
+        _point(1.0, 0.0, True), _point(2.0, -a, True), _point(2.0, flat, True),
+        _point(2.0, a, True)])
+    assert _polylines(path) == [[(1.0, 0.0), (2.0, flat)], [(2.0, -a)], [(2.0, a)]]
+
+
+def test_a_pitchfork_has_two_arms():
+    """A flat beam, then stable beams at -0.4, +1 and +3 mm: the arm across w_c = 0
+    is the beam nearest it (+1 mm); the one at +3 mm was born elsewhere (a review:
+    all three were joined)."""
+    path = EquilibriumPath(P=[1.0, 2.0], x_c=0.5, points=[
+        _point(1.0, 0.0, True), _point(2.0, -4e-4, True), _point(2.0, 1e-3, True),
+        _point(2.0, 3e-3, True)])
+    assert _polylines(path) == [[(1.0, 0.0), (2.0, -4e-4)], [(1.0, 0.0), (2.0, 1e-3)],
+                                [(2.0, 3e-3)]]

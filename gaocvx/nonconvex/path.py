@@ -174,32 +174,38 @@ class EquilibriumPath:
                     br = [pt]
                     branches.append(br)
                 new_open.append(br)
-            for br in new_open:
-                if len(br) == 1:
-                    br[:0] = _pitchfork(br[0], parents, 1e-9 * largest)
+            # (a pitchfork has two arms: a flat beam gets one more, the new beam
+            # nearest w_c = 0, where the arm leaves it)
+            forked = set()
+            for br in sorted((b for b in new_open if len(b) == 1), key=lambda b: abs(b[0]["w_c"])):
+                br[:0] = _pitchfork(br[0], parents, 1e-9 * largest, forked)
             open_ = new_open
         return branches
 
 
-def _pitchfork(pt, parents, flat) -> list:
+def _pitchfork(pt, parents, flat, forked) -> list:
     """``[the flat beam]`` where a beam of ``pt``'s stability on the other side of
-    w_c = 0 continues a flat beam's branch (``|w_c| <= flat``), else ``[]``.
+    w_c = 0 has left a flat beam's branch (``|w_c| <= flat`` there, not at the
+    beam) and that flat beam has no second arm yet (``forked``: ids of those that
+    have; this one is added), else ``[]``.
 
-    Only a flat beam has w_c = 0 to 1e-9 (an unloaded beam: its energy is even
-    in w, so at a buckling load the beams w and -w leave it together).  Linked
-    to one of them only, the path drew the stable flat beam below P_bar_h
-    running to one buckled beam above it, the other a lone dot (an unloaded P4
-    beam's path through the limit).  Mirror images were asked for once; in a
-    channel the two leave the flat beam as images and reach different surfaces
-    (-10 mm and +16 mm one force later), and one was drawn unconnected (a new
-    user's trial).  A flat beam that stays flat keeps its branch, so no beam
-    beside it is joined to it.
+    A flat beam (w_c = 0 to 1e-9 of the largest; so are mode-2 beams at
+    mid-span) of an unloaded beam: its energy is even in w, so at a buckling
+    load the beams w and -w leave it together.  Linked to one of them only, the
+    path drew the stable flat beam below P_bar_h running to one buckled beam
+    above it, the other a lone dot (an unloaded P4 beam's path through the
+    limit).  Mirror images were asked for once; in a channel the two leave the
+    flat beam as images, and one force later one is pressed onto the lower
+    surface (-10 mm) while the other is free (+16 mm): it was drawn unconnected
+    (a new user's trial).  A flat beam that stays flat (its w_c round-off of
+    either sign) keeps its branch and gets no arm.
     """
     if abs(pt["w_c"]) <= flat:
         return []
     for image, prev in parents:
-        if image["stable"] == pt["stable"] and abs(prev["w_c"]) <= flat \
-                and image["w_c"] * pt["w_c"] < 0:
+        if image["stable"] == pt["stable"] and abs(prev["w_c"]) <= flat < abs(image["w_c"]) \
+                and image["w_c"] * pt["w_c"] < 0 and id(prev) not in forked:
+            forked.add(id(prev))
             return [prev]
     return []
 
