@@ -114,6 +114,24 @@ def test_a_beam_pressed_flat_just_above_the_limit_is_certified_as_w_0():
     assert rec["energy"] == 0.0
 
 
+def test_a_point_inside_the_near_surface_is_no_other_minimiser():
+    """The scene above (8801:133): a channel's far surface, 4.8 cm above, set the
+    size against which a point's violation of the near one was judged, so a point
+    3e-13 m inside it counted as admissible and was reported as another minimiser
+    (4.2e-7 J below the certified lower bound on one machine, within the gap on
+    another).  The flat beam w = 0 is the one minimiser."""
+    data = {"beam": {"model": "gao", "supports": "P1", "length": 1.3163345518075953,
+                     "E": 2.1e11, "nu": 0.37017998938920277,
+                     "half_thickness": 0.03175511362843908, "width": 1.0},
+            "load": {"q": -2557368.130017543, "axial": 86426639.68894446},
+            "mesh": {"elements": 8},
+            "obstacle": {"gap": 0.0, "gap_above": 0.047757134097864994}}
+    r = solve(Scene.from_dict(data), "global")
+    glob = r.extra["global"]
+    assert r.status == "optimal" and r.energy == 0.0, r.message
+    assert glob["unique"] and glob["alternatives"] == []
+
+
 def test_untouched_channel_is_certified():
     data = {"beam": {"model": "gao", "supports": "P2", "length": 2.8216664003911887, "E": 2.1e11,
                      "nu": 0.21420910778984964, "half_thickness": 0.06217198969486908,
