@@ -90,6 +90,8 @@ def parse_range(text: str, key: str = "--vary") -> np.ndarray:
         raise SceneError(key, "START and STOP must be finite", text)
     if not 1 <= num <= 100_000:
         raise SceneError(key, "NUM must be between 1 and 100000", text)
+    if num == 1 and stop != start:   # (the grid would drop STOP without a word)
+        raise SceneError(key, "NUM = 1 gives START only: give STOP = START, or NUM >= 2", text)
     if len(parts) == 4 and (start <= 0 or stop <= 0):
         raise SceneError(key, "a log range needs START > 0 and STOP > 0", text)
     return _decimal_grid(parts[0], parts[1], num, log=len(parts) == 4)

@@ -145,6 +145,7 @@ def test_sweep_bad_arguments(scene_file, capsys):
                       (["--vary", "foundation.gap=a:b:3"], "--vary"),
                       (["--vary", "foundation.gap=0:1:3:lin"], "--vary"),
                       (["--vary", "foundation.gap=-1:1:3:log"], "--vary"),
+                      (["--vary", "foundation.gap=0:1:1"], "--vary"),   # (it dropped STOP)
                       (["--vary", "foundation.gap=0:1:3", "--jobs", "0"], "--jobs")]:
         assert main(["sweep", str(scene_file), *argv]) == 2, argv
         err = capsys.readouterr().err.strip().splitlines()
