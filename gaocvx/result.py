@@ -372,13 +372,13 @@ class Result:
 
 
 def _uniqueness(glob: dict, status: str) -> str:
-    """The summary's word on other minimisers: none where unique; where the gap is not
-    certified (``inaccurate``), candidates only (a P4 beam without load at exactly
+    """The summary's word on other minimisers: none where unique; where the answer is
+    not certified (``inaccurate``), candidates only (a P4 beam without load at exactly
     P_bar_h, stopped at the node limit, had five points 5.7e-9 m from w = 0, its one
     minimiser, and was said to be "NOT unique")."""
     if glob["unique"]:
         return ""
     n = len(glob.get("alternatives", [])) + 1
     if status != "optimal":
-        return f", uniqueness not established ({n} candidates; the gap is not certified)"
+        return f", uniqueness not established ({n} candidates)"
     return f", NOT unique ({n} minimisers)"

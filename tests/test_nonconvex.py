@@ -490,4 +490,4 @@ def test_uncertified_alternatives_are_not_called_minimisers(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "status   inaccurate" in out
     assert "uniqueness not established" in out and "not unique" not in out.lower()
-    assert "candidates within the search's gap, not certified" in out   # the note: the message
+    assert "candidates within the gap, not certified as minimisers" in out   # the note

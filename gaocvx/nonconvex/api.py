@@ -140,7 +140,7 @@ def solve_global_result(scene, elements=None, problem=None, solver=None):
         raw["message"] += (f"; not unique: {len(alternatives) + 1} minimisers within the "
                            "certified gap (mirror images or other contact states), all in "
                            "extra['global']['alternatives']")
-    elif alternatives:   # (the gap is not certified: candidates only)
-        raw["message"] += (f"; {len(alternatives) + 1} candidates within the search's gap, "
-                           "not certified, in extra['global']['alternatives']")
+    elif alternatives:   # (the answer is not certified: candidates only)
+        raw["message"] += (f"; {len(alternatives) + 1} candidates within the gap, not "
+                           "certified as minimisers, in extra['global']['alternatives']")
     return make_result(dp, raw, "global", time.perf_counter() - t0, extra={"global": info})
