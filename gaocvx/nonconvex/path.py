@@ -46,7 +46,6 @@ __all__ = ["EquilibriumPath", "equilibrium_path", "characteristic_point"]
 log = logging.getLogger(__name__)
 
 
-
 def characteristic_point(scene, elements=None) -> float:
     """Where the first buckling mode's deflection is largest [m] (the path's default x_c)."""
     from ..discrete import DiscreteProblem

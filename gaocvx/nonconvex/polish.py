@@ -21,8 +21,8 @@ from ..mixed import MixedForm
 from ..certificate import passes
 from .certificate import certify_answer, certify_flat, contact_polish
 
-__all__ = ["to_mixed", "polish", "feasible_energy", "zero_floor", "reflections", "answer_certificate",
-           "search_best", "flat_answer", "SLACK"]
+__all__ = ["to_mixed", "polish", "feasible_energy", "zero_floor", "reflections",
+           "answer_certificate", "search_best", "flat_answer", "SLACK"]
 
 log = logging.getLogger(__name__)
 
