@@ -93,6 +93,16 @@ def test_a_bound_above_the_answer_is_no_certificate():
     assert rec["status"] == "optimal", rec.get("message")
 
 
+# A random campaign's scene (seed 8801, draw 133): P1 in a channel at gap 0, pressed by
+# 2.6e6 N/m at 1.0000017 P_bar_h, 8 elements.
+_PRESSED_IN_A_CHANNEL = {
+    "beam": {"model": "gao", "supports": "P1", "length": 1.3163345518075953, "E": 2.1e11,
+             "nu": 0.37017998938920277, "half_thickness": 0.03175511362843908, "width": 1.0},
+    "load": {"q": -2557368.130017543, "axial": 86426639.68894446},
+    "mesh": {"elements": 8},
+    "obstacle": {"gap": 0.0, "gap_above": 0.047757134097864994}}
+
+
 def test_a_beam_pressed_flat_just_above_the_limit_is_certified_as_w_0():
     """A random campaign (seed 8801, draw 133): P1 in a channel at gap 0, pressed by
     2.6e6 N/m at 1.0000017 P_bar_h, 8 elements.  Both node programs' answers were
@@ -102,13 +112,8 @@ def test_a_beam_pressed_flat_just_above_the_limit_is_certified_as_w_0():
     admissible and certified, is now the answer; the independent checker finds a
     KKT point and nothing lower."""
     from campaign import Case
-    data = {"beam": {"model": "gao", "supports": "P1", "length": 1.3163345518075953,
-                     "E": 2.1e11, "nu": 0.37017998938920277,
-                     "half_thickness": 0.03175511362843908, "width": 1.0},
-            "load": {"q": -2557368.130017543, "axial": 86426639.68894446},
-            "mesh": {"elements": 8},
-            "obstacle": {"gap": 0.0, "gap_above": 0.047757134097864994}}
-    rec = run_case(Case(data, ("P1", "channel", "near-limit"), "8801:133"), starts=12)
+    rec = run_case(Case(_PRESSED_IN_A_CHANNEL, ("P1", "channel", "near-limit"), "8801:133"),
+                   starts=12)
     assert not rec["violations"], rec["violations"]
     assert rec["status"] == "optimal", rec.get("message")
     assert rec["energy"] == 0.0
@@ -120,13 +125,7 @@ def test_a_point_inside_the_near_surface_is_no_other_minimiser():
     3e-13 m inside it counted as admissible and was reported as another minimiser
     (4.2e-7 J below the certified lower bound on one machine, within the gap on
     another).  The flat beam w = 0 is the one minimiser."""
-    data = {"beam": {"model": "gao", "supports": "P1", "length": 1.3163345518075953,
-                     "E": 2.1e11, "nu": 0.37017998938920277,
-                     "half_thickness": 0.03175511362843908, "width": 1.0},
-            "load": {"q": -2557368.130017543, "axial": 86426639.68894446},
-            "mesh": {"elements": 8},
-            "obstacle": {"gap": 0.0, "gap_above": 0.047757134097864994}}
-    r = solve(Scene.from_dict(data), "global")
+    r = solve(Scene.from_dict(_PRESSED_IN_A_CHANNEL), "global")
     glob = r.extra["global"]
     assert r.status == "optimal" and r.energy == 0.0, r.message
     assert glob["unique"] and glob["alternatives"] == []
