@@ -86,6 +86,7 @@ def solve_global_result(scene, elements=None, problem=None, solver=None):
     """
     from ..convex import log_outcome
     from ..solve import _solve_exact, make_result
+    from .at_limit import flat_at_limit
     from .bounds import check_bounded
     from .minimum import MAX_ELEMENTS, MAX_MODES, solve_certified
     from .modes import MAX_UNSTABLE, unstable_modes
@@ -127,7 +128,10 @@ def solve_global_result(scene, elements=None, problem=None, solver=None):
         # Not provably below the limit, yet the eigen-solve puts lambda_1 a hair above
         # P (within round-off): the first mode is treated as unstable (c_1 ~ 0).
         modes = unstable_modes(dp, min_k=1)
-    dp, raw, info = solve_certified(dp, modes)
+    # (without load at the limit, w = 0 in closed form: the search cannot prove a
+    # quartic minimum)
+    out = flat_at_limit(dp, modes)
+    dp, raw, info = out if out is not None else solve_certified(dp, modes)
     # Amplitudes in metres too: the non-dimensional ones are in this answer's own
     # deflection scale, which differs from an equilibria list's (a channel: 0.02 m
     # here, 0.0527 m there, and one minimiser's amplitudes 2.229 and 0.846).
