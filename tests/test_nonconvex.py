@@ -23,6 +23,7 @@ from nonconvex_independent import first_mode, pencil
 
 from gaocvx import DiscreteProblem, Scene, SceneError, solve
 from gaocvx.cli import main
+from gaocvx.nonconvex import equilibria
 
 LAMBDA_P4 = None  # set lazily (P_bar_h of the 16-element P4 mesh, independent)
 
@@ -520,3 +521,7 @@ def test_an_unloaded_beam_at_exactly_the_limit_is_certified_flat(supports, found
     assert 0.0 < g["bound_gap"] <= 0.75 * (5e-13 * dp.p) ** 2 / a * dp.E0
     assert g["lower_bound"] == -g["bound_gap"]
     assert multistart(scene, dp.W, starts=8) >= g["lower_bound"] - 1e-12 * dp.E0
+    # the only equilibrium (the same bound, on the gradient's work on the beam)
+    (eq,) = equilibria(scene)
+    assert eq.stable and eq.complete and eq.status == "optimal"
+    assert np.all(eq.w == 0.0) and eq.energy == 0.0

@@ -21,7 +21,10 @@ so ``max |w| <= sqrt(6 delta / a)`` (``|w(x)| <= ∫|w'| <= sqrt(S)``).  The
 same bound at twice the limit load (``delta = lambda_1``) has its minimum at
 ``S = 3 lambda_1 / a``, the size of the beam buckled there: against it,
 every minimiser's slope norm ``sqrt(S)`` is at most ``sqrt(2 delta /
-lambda_1)``.  ``w = 0`` is certified where that is at most the certificate's
+lambda_1)``.  So is every equilibrium's: the gradient's work on the beam
+itself, ``u'Ku - p S + a/3 ∫ w'^4`` plus the foundation's (not negative), is
+0 there, so ``a S^2 / 3 <= delta S`` and ``S <= 3 delta / a``; ``w = 0`` is
+the only equilibrium to within that (:func:`.stationary.equilibria`).  ``w = 0`` is certified where that is at most the certificate's
 STATIONARITY_TOL (``delta`` at most 5e-13 of ``lambda_1``: ``p`` at the
 limit to within the enclosure, 2e-14 to 3e-14 wide, and the data's
 round-off).

@@ -188,7 +188,8 @@ class Equilibrium:
         within ``stationary1.RHO`` times the amplitude bound S of a listed one's
         amplitude, by :mod:`.completeness`; two: within twice that, by
         :mod:`.completeness2`, with an obstacle or channel over the admissible
-        amplitudes' polygon; below the limit the one equilibrium), False where
+        amplitudes' polygon; below the limit the one equilibrium; without load
+        at the limit w = 0 alone, by :mod:`.at_limit`), False where
         that proof failed, None where none is attempted (two unstable modes with
         an obstacle or channel whose polygon could not be bounded: a sampling).
     """

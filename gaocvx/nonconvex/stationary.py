@@ -55,6 +55,7 @@ from .bounds import check_bounded, equilibrium_box, estimate_boxes, zoom_boxes
 from . import stationary1 as line
 from .equilibrium import Equilibrium, check_has_minimum, check_mountain_pass, same_point
 from .images import complete_beams
+from .at_limit import flat_at_limit
 from .probes import hessian_stability
 from .roundoff import label_threshold, round_off, settled, widened
 from .obstacle_checks import check_contact, exact_flat, global_minimisers
@@ -208,6 +209,11 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
     modes = unstable_modes(dp)
     if modes.k == 0:
         modes = unstable_modes(dp, min_k=1)
+    if modes.k == 1 and flat_at_limit(dp, modes) is not None:
+        # (without load at the limit: w = 0, the only equilibrium, in closed form)
+        return [Equilibrium(0.0, True, [0.0], dp.x.copy(), np.zeros(dp.n_nodes),
+                            np.zeros(dp.n_nodes), 0.0, "optimal", float(dp.P), W=dp.W,
+                            complete=True)]
     if modes.k > 2:
         count = f"more than {MAX_UNSTABLE}" if modes.k > MAX_UNSTABLE else str(modes.k)
         raise SceneError("load.axial", f"P = {dp.P:.4g} N leaves {count} unstable buckling "
