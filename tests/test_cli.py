@@ -79,6 +79,20 @@ def test_bad_input_exit_2_names_key(capsys, scene, argv, key):
     assert "Traceback" not in err and out == ""
 
 
+@pytest.mark.parametrize("argv, expected", [
+    (["path", "{scene}", "--axial", "0:1e9:2", "--at", "abc"],
+     "error: --at: must be a number (got 'abc')"),
+    (["verify", "{scene}", "--max-gap", "1e"], "error: --max-gap: must be a number (got '1e')"),
+    (["sweep", "{scene}", "--vary", "load.q=0:1:2", "--jobs", "x"],
+     "error: --jobs: must be a whole number (got 'x')"),
+])
+def test_an_option_of_the_wrong_type_is_named_with_its_value(capsys, scene, argv, expected):
+    """As every other bad input: the option and the value, not argparse's "arguments:
+    argument --at: invalid float value: 'abc'" (a new user's trial)."""
+    code, out, err = run(capsys, *[a.format(scene=scene) for a in argv])
+    assert code == 2 and out == "" and err.strip() == expected
+
+
 def test_convexity_limit_message(capsys, scene):
     """Newton and convex refuse P >= P_bar_h with the limit in the message; auto takes the
     certified global method there (issue 10) instead of refusing."""

@@ -6,6 +6,7 @@ import argparse
 import json
 import logging
 import math
+import re
 from pathlib import Path
 
 from ..errors import SceneError
@@ -21,6 +22,14 @@ class _Parser(argparse.ArgumentParser):
     """argparse that reports usage errors in the project's one-line format."""
 
     def error(self, message):  # noqa: D401 - argparse API
+        # A value of the wrong type names its option and the value, as every other
+        # bad input does ("--at: must be a number (got 'abc')", not argparse's
+        # "argument --at: invalid float value: 'abc'")
+        bad = re.fullmatch(r"argument (\S+): invalid (float|int) value: '(.*)'", message)
+        if bad:
+            option, kind, value = bad.groups()
+            raise SceneError(option.split("/")[-1], "must be a number" if kind == "float"
+                             else "must be a whole number", value)
         raise SceneError("arguments", message)
 
 
