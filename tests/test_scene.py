@@ -91,6 +91,13 @@ def test_missing_and_conflicting():
         Scene.from_dict(scene_dict(model="euler-bernoulli", E_alpha=1.0))
     with pytest.raises(SceneError, match="^extras: unknown key"):
         Scene.from_dict({**scene_dict(), "extras": {}})
+    # a misspelt key is named with the key it was meant to be
+    d = scene_dict()
+    d["beam"]["lenght"] = d["beam"].pop("length")
+    with pytest.raises(SceneError, match=r"^beam.lenght: unknown key \(did you mean 'length'\? "):
+        Scene.from_dict(d)
+    with pytest.raises(SceneError, match=r"^beam.colour: unknown key \(known: "):
+        Scene.from_dict({**scene_dict(), "beam": {**scene_dict()["beam"], "colour": 1}})
 
 
 @pytest.mark.parametrize("h", [5.6e102, 1e-120])

@@ -16,6 +16,7 @@ gaocvx.errors.SceneError: beam.nu: must be < 0.5 (got 0.5)
 
 from __future__ import annotations
 
+import difflib
 import math
 import numbers
 from collections.abc import Iterable
@@ -191,5 +192,8 @@ def _reject_unknown(section: str, data: Mapping, known) -> None:
         if name not in known:
             where = f"{section}.{name}" if section else str(name)
             listed = ", ".join(known)
-            raise SceneError(where, f"unknown key (known: {listed})", data[name])
+            # (a misspelling is the usual cause: "beam.lenght")
+            close = difflib.get_close_matches(str(name), list(known), n=1)
+            hint = f"did you mean {close[0]!r}? " if close else ""
+            raise SceneError(where, f"unknown key ({hint}known: {listed})", data[name])
 
