@@ -374,13 +374,14 @@ def summary_row(value, item, keys=None) -> dict:
     if isinstance(item, Exception):
         return {**head, "status": "error", "error": str(item)}
     r = item
-    zones = r.zones or []
     row = {**head, "status": r.status, "method": r.method,
            "min_w": r.min["w"], "min_x": r.min["x"], "max_w": r.max["w"], "max_x": r.max["x"],
-           "energy": r.energy, "contact_length": float(sum(b - a for a, b in zones)),
-           "contact_zones": len(zones),   # a point contact [x, x] counts, though of length 0
-           "time_s": r.time_s}
+           "energy": r.energy, "time_s": r.time_s}
     if r.scene.contact is not None:
+        # (none without a foundation or obstacle, as solve's "contact" is null there)
+        zones = r.zones or []
+        row["contact_length"] = float(sum(b - a for a, b in zones))
+        row["contact_zones"] = len(zones)   # a point contact [x, x] counts, though of length 0
         # How far the beam sinks below the surface, at its worst node (a gap
         # profile's surface is not level: the deepest point need not be the lowest).
         level = -np.asarray(r.scene.gap_at(r.x), float)

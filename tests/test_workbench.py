@@ -111,6 +111,24 @@ def test_sweep_penetration_falls_as_stiffness_rises(tmp_path, scene_file, capsys
     assert (tmp_path / "s.png").exists()
 
 
+def test_sweep_without_contact_has_no_contact_numbers(tmp_path, capsys):
+    """No foundation or obstacle: the contact columns are empty ("-" in the table),
+    as solve's contact is null; a new user's trial saw contact 0 and 0 zones."""
+    path = tmp_path / "free.toml"
+    d = scene_dict("P1", "gao", q=-1e6, elements=8)
+    beam = "\n".join(f"{k} = {json.dumps(v)}" for k, v in d["beam"].items())
+    path.write_text(f"[beam]\n{beam}\n[load]\nq = -1e6\n[mesh]\nelements = 8\n")
+    csv_path = tmp_path / "s.csv"
+    assert main(["sweep", str(path), "--vary", "load.q=-1e6:-2e6:2", "--csv", str(csv_path)]) == 0
+    table = capsys.readouterr().out.strip().splitlines()
+    assert len(table) == 3 and all(line.split()[-2:] == ["-", "-"] for line in table[1:])
+    rows = list(csv.DictReader(csv_path.open()))
+    assert [(r["contact_length"], r["contact_zones"], r["penetration"]) for r in rows] == [
+        ("", "", "")] * 2
+    assert main(["solve", str(path), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["contact"] == {"zones": None, "reaction": None}
+
+
 def test_sweep_approaches_the_rigid_obstacle():
     base = Scene.from_dict(scene_dict(foundation=(0.007, 1e10), q=-5e8, elements=16))
     obstacle = solve(Scene.from_dict(scene_dict(obstacle=0.007, q=-5e8, elements=16)))

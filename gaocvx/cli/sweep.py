@@ -73,8 +73,10 @@ def _cmd_sweep(args) -> int:
             if r["status"] == "error":
                 print(f"{at} error      {r['error']}")
             else:
+                contact = (f"{r['contact_length']:11.4g} {r['contact_zones']:5d}"
+                           if "contact_zones" in r else f"{'-':>11s} {'-':>5s}")
                 print(f"{at} {r['status']:10s} {r['min_w']:12.6g} {r['min_x']:7.4g} "
-                      f"{r['energy']:12.6g} {r['contact_length']:11.4g} {r['contact_zones']:5d}")
+                      f"{r['energy']:12.6g} {contact}")
     if args.csv:
         fields = [*columns, "status", "method", "min_w", "min_x", "max_w", "max_x", "energy",
                   "contact_length", "contact_zones", "penetration", "time_s", "error"]
