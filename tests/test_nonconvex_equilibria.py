@@ -675,6 +675,8 @@ def test_amplitudes_in_metres_agree_between_solve_equilibria_and_path():
     assert best.stable and best.energy == pytest.approx(solve(scene, "global").energy, rel=1e-9)
     assert abs(glob["amplitudes"][0] - best.amplitudes[0]) > 0.5     # different scales
     assert glob["amplitudes_m"][0] == pytest.approx(best.to_dict()["amplitudes_m"][0], rel=1e-6)
+    # the attribute has the JSON's name (and keeps its first one)
+    assert best.amplitudes_m == best.to_dict()["amplitudes_m"] == best.amplitude_m
     point = next(p for p in equilibrium_path(scene, [1.5e9]).points if p["global"])
     assert point["amplitude_m"] == pytest.approx(glob["amplitudes_m"][0], rel=1e-6)
     # in metres: the mode's amplitude, of the size of the deflection (4.5 cm here)

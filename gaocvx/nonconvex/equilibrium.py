@@ -174,7 +174,7 @@ class Equilibrium:
         label replaced the probes', or for an equilibrium polished on the
         whole beam (its label from the second-order conditions).
     W : float
-        The deflection scale [m] of the amplitudes (see :attr:`amplitude_m`).
+        The deflection scale [m] of the amplitudes (see :attr:`amplitudes_m`).
     energy_scale : float
         The sum of the magnitudes of its energy's parts [J] (bending, Gao,
         axial, load, contact): the scale of the energy's round-off (NaN where
@@ -210,9 +210,13 @@ class Equilibrium:
     complete: bool | None = None
 
     @property
-    def amplitude_m(self) -> list:
-        """The amplitudes in metres (``s W``): comparable between axial forces."""
+    def amplitudes_m(self) -> list:
+        """The amplitudes in metres (``s W``): comparable between axial forces, and
+        with ``solve``'s ``global.amplitudes_m`` (the same name as in JSON)."""
         return [a * self.W for a in self.amplitudes]
+
+    # (its first name, kept for code written against it)
+    amplitude_m = amplitudes_m
 
     @property
     def min(self) -> dict:
@@ -262,7 +266,7 @@ class Equilibrium:
         nodal values."""
         return {"energy": self.energy, "stability": "stable" if self.stable else "unstable",
                 "P": self.P, "min": self.min, "max": self.max, "amplitudes": self.amplitudes,
-                "amplitudes_m": self.amplitude_m, "status": self.status,
+                "amplitudes_m": self.amplitudes_m, "status": self.status,
                 "residual": self.residual, "complete": self.complete,
                 "nodes": {"x": self.x.tolist(), "w": self.w.tolist(),
                           "slope": self.slope.tolist()}}

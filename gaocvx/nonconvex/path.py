@@ -285,12 +285,12 @@ def equilibrium_path(scene, P_values, elements: int | None = None, x_c: float | 
                            "max_abs_w": float(np.max(np.abs(e.w))), "energy": e.energy,
                            "stable": e.stable, "global": best,
                            "amplitude": e.amplitudes[0] if e.amplitudes else None,
-                           "amplitude_m": e.amplitude_m[0] if e.amplitudes else None,
+                           "amplitude_m": e.amplitudes_m[0] if e.amplitudes else None,
                            "status": e.status, "complete": e.complete})
         # Warm start: the next force samples these amplitudes first (a force
         # with no equilibria passes on the last ones found).
         if eqs:
-            seeds = np.array([e.amplitude_m[0] for e in eqs if e.amplitudes])
+            seeds = np.array([e.amplitudes_m[0] for e in eqs if e.amplitudes])
         if progress:
             progress(done, len(P_values))
     return EquilibriumPath(P_values, points, x_c, errors, failures)

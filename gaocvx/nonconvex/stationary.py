@@ -141,7 +141,7 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         checks it (a whole number in [1, 10^6]: ``8.0`` and numpy integers
         are accepted, ``2.5``, ``"8"`` and bools are not).
     seeds : sequence of float, optional
-        Amplitudes [m] (:attr:`Equilibrium.amplitude_m`) to sample besides the
+        Amplitudes [m] (:attr:`Equilibrium.amplitudes_m`) to sample besides the
         grid: a path's previous equilibria (one unstable mode; two ignore them).
     grid : int
         Grid points over the amplitude range, 2 to :data:`MAX_GRID` (one
