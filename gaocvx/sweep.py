@@ -49,7 +49,7 @@ from .linalg import one_blas_thread
 from .scene import Scene
 from .solve import choose_method, solve
 
-__all__ = ["parse_range", "grid", "sweep", "scene_at", "summary_row", "LOAD_SCALE"]
+__all__ = ["parse_range", "count_of", "grid", "sweep", "scene_at", "summary_row", "LOAD_SCALE"]
 
 log = logging.getLogger(__name__)
 
@@ -82,7 +82,7 @@ def parse_range(text: str, key: str = "--vary") -> np.ndarray:
         raise SceneError(key, "must be START:STOP:NUM or START:STOP:NUM:log", text)
     try:
         start, stop = float(parts[0]), float(parts[1])
-        num = int(parts[2])
+        num = count_of(parts[2])
     except ValueError:
         raise SceneError(key, "START and STOP must be numbers and NUM a whole number",
                          text) from None
@@ -95,6 +95,28 @@ def parse_range(text: str, key: str = "--vary") -> np.ndarray:
     if len(parts) == 4 and (start <= 0 or stop <= 0):
         raise SceneError(key, "a log range needs START > 0 and STOP > 0", text)
     return _decimal_grid(parts[0], parts[1], num, log=len(parts) == 4)
+
+
+def count_of(text: str) -> int:
+    """NUM of a range: a whole number, written ``31``, ``31.0`` or ``3.1e1``.
+
+    Raises
+    ------
+    ValueError
+        Where it is no whole number (``2.5``, ``abc``, ``inf``).
+
+    Examples
+    --------
+    >>> count_of("31"), count_of("3.0"), count_of("1e2")
+    (31, 3, 100)
+    """
+    try:
+        return int(text)
+    except ValueError:
+        value = float(text)   # (a ValueError of its own for "abc")
+        if not value.is_integer():   # (inf and nan are not)
+            raise ValueError(text) from None
+        return int(value)
 
 
 def _decimal_grid(start: str, stop: str, num: int, log: bool) -> np.ndarray:

@@ -274,6 +274,20 @@ def test_cli_negative_axial_range_says_how_to_write_it(eb_file, capsys):
     assert capsys.readouterr().out.startswith("# 3 equilibria at 3 axial forces; ")
 
 
+def test_an_axial_range_takes_num_written_as_a_whole_float(eb_file, capsys):
+    """3.0 is a whole number (a review: "0:3e9:3.0" was refused as not one)."""
+    from gaocvx.nonconvex.cli import parse_range
+    from gaocvx.sweep import parse_range as sweep_range
+
+    assert parse_range("0:2e9:3.0").tolist() == parse_range("0:2e9:3").tolist() == [0.0, 1e9, 2e9]
+    assert sweep_range("0:2:3.0").tolist() == sweep_range("0:2:3e0").tolist() == [0.0, 1.0, 2.0]
+    for bad in ("0:2:2.5", "0:2:inf", "0:2:nan", "0:2:x"):
+        with pytest.raises(SceneError, match="NUM a whole number"):
+            sweep_range(bad)
+        with pytest.raises(SceneError, match="NUM a whole number"):
+            parse_range(bad)
+
+
 @pytest.mark.parametrize("text, says", [
     ("1e9:2e9:2.5", "NUM a whole number"),
     ("1e9:2e9:1", "NUM = 1 traces START only"),    # (STOP was dropped without a word)

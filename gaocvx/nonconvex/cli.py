@@ -50,11 +50,13 @@ def parse_range(text: str) -> np.ndarray:
     >>> parse_range("0:2e9:3").tolist()
     [0.0, 1000000000.0, 2000000000.0]
     """
+    from ..sweep import count_of
+
     parts = str(text).split(":")
     try:
         if len(parts) != 3:
             raise ValueError
-        start, stop, num = float(parts[0]), float(parts[1]), int(parts[2])
+        start, stop, num = float(parts[0]), float(parts[1]), count_of(parts[2])
     except ValueError:
         raise SceneError("--axial", "must be START:STOP:NUM, NUM a whole number, e.g. 0:3e9:31",
                          text) from None
