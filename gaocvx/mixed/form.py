@@ -336,6 +336,16 @@ class MixedForm:
             return 1.0  # the answer is w = 0 exactly; any unit serves
         return ZERO_ANSWER * self.dp.W_linear / self.dp.W
 
+    @property
+    def size_floor(self) -> float:
+        """The smallest size the global method's certificates measure an answer
+        against (non-dimensional): :attr:`zero_floor` where a load acts; without
+        one 0, the answer's own size (there is no linear answer to take a
+        fraction of, and the floor of 1 would measure a beam buckled to less
+        than W against more than itself).
+        """
+        return self.zero_floor if self.has_load else 0.0
+
     def energy_at_rest(self) -> float:
         """The energy of w = 0 (non-dimensional): 0, or a bonded foundation's 1/2 c g^2 L.
 

@@ -227,7 +227,7 @@ def certify_answer(dp, prog, mf, z, lam) -> tuple:
     """
     if dp.contact != "obstacle":
         return certify(mf, z, lam, size=modes_size(mf, prog.modes, z)), lam
-    zfloor = mf.zero_floor if mf.has_load else 0.0
+    zfloor = mf.size_floor
     if hasattr(prog, "certify"):
         return prog.certify(z, mf.no_contact_forces() if lam is None else lam, zfloor)
     return certify_contact(dp, prog.modes, mf.to_hermite(z), lam, prog.rows, prog.levels, zfloor)

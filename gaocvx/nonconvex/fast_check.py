@@ -202,7 +202,7 @@ def contact_polish(prog, u, lam):
     from .polish import to_mixed
 
     mf = prog.mf
-    floor = mf.zero_floor if mf.has_load else 0.0
+    floor = mf.size_floor
     z0 = mf.on_manifold(to_mixed(mf, u))
     lam = np.asarray(lam, float)
     before = certify(prog, z0, lam, floor)

@@ -213,7 +213,7 @@ def _kkt_point(dp, prog, s) -> bool:
     fast = getattr(prog, "prog", None)
     if fast is not None and hasattr(fast, "certify"):    # ContactSlices
         mf = fast.mf
-        floor = mf.zero_floor if mf.has_load else 0.0
+        floor = mf.size_floor
         residual, _ = fast.certify(to_mixed(mf, u), prog.lam, floor)
         if passes(residual):
             return True
@@ -222,7 +222,7 @@ def _kkt_point(dp, prog, s) -> bool:
         modes, lam, rows, levels = fast.modes, prog.lam, fast.rows, fast.levels
     else:
         mf = MixedForm.on_obstacle(dp)
-        floor = mf.zero_floor if mf.has_load else 0.0
+        floor = mf.size_floor
         modes, lam, rows, levels = prog.modes, prog.obstacle_multipliers(), prog.rows, \
             prog.levels
     residual, _ = certify_contact(dp, modes, u, lam, rows, levels, floor)
@@ -263,7 +263,7 @@ def exact_flat(dp, modes, out, classify, relabel: bool = False, S: float = 0.0) 
     rows, levels = obstacle_rows(dp)
     u0 = np.zeros(dp.n)
     mf = MixedForm.on_obstacle(dp)
-    floor = mf.zero_floor if mf.has_load else 0.0
+    floor = mf.size_floor
     certified = certify_flat(dp, modes, rows, levels, floor)
     if certified is None:
         return out

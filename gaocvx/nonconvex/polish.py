@@ -139,10 +139,9 @@ def _violates(dp, prog, u) -> bool:
 
 
 def zero_floor(dp) -> float:
-    """The certificate's zero floor (:attr:`MixedForm.zero_floor`; 0 without load):
+    """The certificate's zero floor (:attr:`MixedForm.size_floor`; 0 without load):
     deflections below it are zero to the certificate."""
-    mf = MixedForm.on_obstacle(dp)
-    return mf.zero_floor if mf.has_load else 0.0
+    return MixedForm.on_obstacle(dp).size_floor
 
 
 def _inside(prog, u, floor) -> bool:
@@ -311,6 +310,5 @@ def flat_answer(dp, prog, mf, bound):
     u0 = np.zeros(dp.n)
     if not dp.energy(u0) <= bound:
         return None
-    flat = certify_flat(dp, prog.modes, prog.rows, prog.levels,
-                        mf.zero_floor if mf.has_load else 0.0)
+    flat = certify_flat(dp, prog.modes, prog.rows, prog.levels, mf.size_floor)
     return None if flat is None else (mf.on_manifold(to_mixed(mf, u0)),) + flat
