@@ -358,8 +358,8 @@ class Result:
                 for s in self.support_reactions))
         glob = self.extra.get("global")
         if glob:  # the global method's certificate (gaocvx.nonconvex)
-            how = ("by the dual bound" if glob.get("certificate") == "dual bound"
-                   else f"{glob['nodes']} nodes")
+            how = {"dual bound": "by the dual bound", "at the limit": "in closed form at the "
+                   "limit"}.get(glob.get("certificate"), f"{glob['nodes']} nodes")
             lines.append(f"global   {glob['unstable_modes']} unstable mode(s), certified gap "
                          f"{glob['bound_gap']:.3g} J, {how}"
                          + _uniqueness(glob, self.status))

@@ -17,17 +17,22 @@ term is not negative.  So, with ``delta = max(p - lower, 0)``::
     Pi(u) >= -delta S / 2 + a S^2 / 12 >= -3 delta^2 / (4 a),
 
 and every beam of energy at most 0 (every minimiser) has ``S <= 6 delta / a``,
-so ``max |w| <= sqrt(6 delta / a)`` (``|w(x)| <= ∫|w'| <= sqrt(S)``).  The
-same bound at twice the limit load (``delta = lambda_1``) has its minimum at
-``S = 3 lambda_1 / a``, the size of the beam buckled there: against it,
-every minimiser's slope norm ``sqrt(S)`` is at most ``sqrt(2 delta /
-lambda_1)``.  So is every equilibrium's: the gradient's work on the beam
-itself, ``u'Ku - p S + a/3 ∫ w'^4`` plus the foundation's (not negative), is
-0 there, so ``a S^2 / 3 <= delta S`` and ``S <= 3 delta / a``; ``w = 0`` is
-the only equilibrium to within that (:func:`.stationary.equilibria`).  ``w = 0`` is certified where that is at most the certificate's
-STATIONARITY_TOL (``delta`` at most 5e-13 of ``lambda_1``: ``p`` at the
-limit to within the enclosure, 2e-14 to 3e-14 wide, and the data's
-round-off).
+so ``max |w| <= sqrt(6 delta / a)`` (``|w(x)| <= ∫|w'| <= sqrt(S)``, w = 0 at
+x = 0 for every support).  So does every equilibrium, more so: the gradient's
+work on the beam itself, ``u'Ku - p S + a/3 ∫ w'^4`` plus the foundation's
+(not negative), is 0 there, so ``a S^2 / 3 <= delta S`` and ``S <= 3 delta /
+a``; ``w = 0`` is the only equilibrium to within that
+(:func:`.stationary.equilibria`).
+
+``w = 0`` is certified where ``delta`` is at most AT_LIMIT of ``lambda_1``: a
+few times the enclosure's width (2e-14 to 3e-14) and the data's round-off, the
+window within which no computation in double precision tells ``p`` from
+``lambda_1``.  Every minimiser then lies within ``sqrt(2 delta / lambda_1)``
+(4.5e-7 at most) of ``w = 0``, measured as ``sqrt(S)`` against ``sqrt(3
+lambda_1 / a)``, the minimum of the same bound at twice the limit load (the
+beam buckled there has a smaller ``S``, by ``∫ phi'^4 / (∫ phi'^2)^2``, 1.5 for
+a sine); the energy within ``3 delta^2 / (4 a)``.  Beyond the window the branch
+and bound runs, as for any ``P``.
 
 Examples
 --------
@@ -49,17 +54,21 @@ import numpy as np
 
 from ..certificate import answer, certify
 from ..mixed import MixedForm
-from ..tolerances import STATIONARITY_TOL
 from .polish import to_mixed
 
-__all__ = ["flat_at_limit", "distance_bound"]
+__all__ = ["flat_at_limit", "distance_bound", "AT_LIMIT"]
+
+# How far p may lie above the enclosure's lower bound of lambda_1, relative, for
+# w = 0 to be the answer: a few times the enclosure's width (2e-14 to 3e-14)
+# with the data's round-off (certificate.DATA_ROUNDOFF, 9e-16).
+AT_LIMIT = 1e-13
 
 
 def distance_bound(dp) -> tuple:
     """``(delta, relative)``: how far ``p`` may lie above ``lambda_1`` (non-dimensional,
     from the enclosure's lower bound) and the bound ``sqrt(2 delta / lambda_1)`` on
-    every minimiser's distance from ``w = 0``, relative to the beam buckled at twice
-    the limit (the module's notes)."""
+    every minimiser's distance from ``w = 0``, against the beam buckled at twice the
+    limit (the module's notes)."""
     from .. import limit
 
     enclosure = limit.analysis(dp).enclosure()
@@ -81,8 +90,8 @@ def flat_at_limit(dp, modes):
     -------
     tuple or None
         ``(dp, raw, info)`` as :func:`.minimum.solve_global`, where the scene has
-        no load, obstacle or bonded bed, has the Gao term, and ``w = 0`` lies
-        within STATIONARITY_TOL of every minimiser (the module's notes); else None.
+        no load, obstacle or bonded bed, has the Gao term, and ``p`` lies within
+        AT_LIMIT of ``lambda_1`` (the module's notes); else None.
     """
     t0 = time.perf_counter()
     mf = MixedForm(dp)
@@ -90,7 +99,7 @@ def flat_at_limit(dp, modes):
             or not dp.a > 0):
         return None
     delta, relative = distance_bound(dp)
-    if not relative <= STATIONARITY_TOL:
+    if not delta <= AT_LIMIT * dp.p:
         return None
     z = mf.on_manifold(to_mixed(mf, np.zeros(dp.n)))
     residual = certify(mf, z, None)
@@ -98,8 +107,8 @@ def flat_at_limit(dp, modes):
     raw = answer(mf, z, None, residual,
                  f"global: w = 0, without load at the limit (P above lambda_1 by at most "
                  f"{delta / dp.p:.1g} of it, by its enclosure): every minimiser within "
-                 f"{relative:.1g} of the beam buckled at twice the limit, certified gap "
-                 f"{gap * dp.E0:.3g} J (closed form)", 0, "closed-form", t0)
+                 f"{relative:.1g} of it, against the beam buckled at twice the limit, "
+                 f"certified gap {gap * dp.E0:.3g} J (closed form)", 0, "closed-form", t0)
     info = {"unstable_modes": int(modes.k), "mode_loads": [float(x) for x in modes.loads],
             "bound_gap": float(gap * dp.E0), "lower_bound": float(-gap * dp.E0),
             "unique": True, "nodes": 0, "certificate": "at the limit",
