@@ -533,3 +533,23 @@ def test_an_unloaded_beam_at_exactly_the_limit_is_certified_flat(supports, found
     d["load"]["axial"] *= 1.0 + 1e-11
     above = DiscreteProblem(Scene.from_dict(d), check_convexity=False)
     assert flat_at_limit(above, unstable_modes(above)) is None
+
+
+def test_at_the_limit_a_weak_gao_term_is_no_flat_certificate():
+    """The bound puts every minimiser within sqrt(6 delta / a) W of w = 0; with a Gao
+    term 1e-300 of steel's (a review) that is astronomically far (a gap of 4.7e289 J
+    was certified): w = 0 stands only within 1e-6 of the length."""
+    from gaocvx.nonconvex.at_limit import flat_at_limit
+    from gaocvx.nonconvex.modes import unstable_modes
+
+    d = scene_dict("P4", q=None, axial=1.0, elements=8)
+    for E_alpha, taken in ((None, True), (1e-300, False), (1e3, False)):
+        if E_alpha is not None:
+            d["beam"]["E_alpha"] = E_alpha
+        d["load"]["axial"] = solve(Scene.from_dict({**d, "load": {}})).P_bar
+        dp = DiscreteProblem(Scene.from_dict(d), check_convexity=False)
+        out = flat_at_limit(dp, unstable_modes(dp))
+        assert (out is not None) == taken, E_alpha
+        if taken:   # every minimiser within the reach the message states, in metres
+            reach = float(re.search(r"within ([0-9.e+-]+) m;", out[1]["message"]).group(1))
+            assert 0.0 < reach <= 1e-6 * d["beam"]["length"]

@@ -24,10 +24,12 @@ work on the beam itself, ``u'Ku - p S + a/3 ∫ w'^4`` plus the foundation's
 a``; ``w = 0`` is the only equilibrium to within that
 (:func:`.stationary.equilibria`).
 
-``w = 0`` is certified where ``delta`` is at most AT_LIMIT of ``lambda_1``: a
-few times the enclosure's width (2e-14 to 3e-14) and the data's round-off, the
-window within which no computation in double precision tells ``p`` from
-``lambda_1``.  Every minimiser then lies within ``sqrt(2 delta / lambda_1)``
+``w = 0`` is certified where ``delta`` is at most AT_LIMIT of ``lambda_1`` (a
+few times the enclosure's width, 2e-14 to 3e-14, and the data's round-off:
+the window within which no computation in double precision tells ``p`` from
+``lambda_1``) and ``sqrt(6 delta / a)`` at most REACH of the length (a weak
+Gao term leaves the buckled beam astronomically large).  Every minimiser then
+lies within ``sqrt(2 delta / lambda_1)``
 (4.5e-7 at most) of ``w = 0``, measured as ``sqrt(S)`` against ``sqrt(3
 lambda_1 / a)``, the minimum of the same bound at twice the limit load (the
 beam buckled there has a smaller ``S``, by ``∫ phi'^4 / (∫ phi'^2)^2``, 1.5 for
@@ -56,12 +58,16 @@ from ..certificate import answer, certify
 from ..mixed import MixedForm
 from .polish import to_mixed
 
-__all__ = ["flat_at_limit", "distance_bound", "AT_LIMIT"]
+__all__ = ["flat_at_limit", "distance_bound", "AT_LIMIT", "REACH"]
 
 # How far p may lie above the enclosure's lower bound of lambda_1, relative, for
 # w = 0 to be the answer: a few times the enclosure's width (2e-14 to 3e-14)
 # with the data's round-off (certificate.DATA_ROUNDOFF, 9e-16).
 AT_LIMIT = 1e-13
+# And every minimiser within this fraction of the length of w = 0 (sqrt(6 delta / a) W):
+# a weak Gao term (a review's E_alpha = 1e-300) leaves the buckled beam, and the
+# window's minimisers with it, astronomically large, a gap of 4.7e289 J.
+REACH = 1e-6
 
 
 def distance_bound(dp) -> tuple:
@@ -99,7 +105,8 @@ def flat_at_limit(dp, modes):
             or not dp.a > 0):
         return None
     delta, relative = distance_bound(dp)
-    if not delta <= AT_LIMIT * dp.p:
+    reach = math.sqrt(6.0 * delta / dp.a) * dp.W     # [m]: every minimiser's max |w|
+    if not (delta <= AT_LIMIT * dp.p and reach <= REACH * dp.L):
         return None
     z = mf.on_manifold(to_mixed(mf, np.zeros(dp.n)))
     residual = certify(mf, z, None)
@@ -107,8 +114,9 @@ def flat_at_limit(dp, modes):
     raw = answer(mf, z, None, residual,
                  f"global: w = 0, without load at the limit (P above lambda_1 by at most "
                  f"{delta / dp.p:.1g} of it, by its enclosure): every minimiser within "
-                 f"{relative:.1g} of it, against the beam buckled at twice the limit, "
-                 f"certified gap {gap * dp.E0:.3g} J (closed form)", 0, "closed-form", t0)
+                 f"{relative:.1g} of it, against the beam buckled at twice the limit, and "
+                 f"within {reach:.2g} m; certified gap {gap * dp.E0:.3g} J (closed form)",
+                 0, "closed-form", t0)
     info = {"unstable_modes": int(modes.k), "mode_loads": [float(x) for x in modes.loads],
             "bound_gap": float(gap * dp.E0), "lower_bound": float(-gap * dp.E0),
             "unique": True, "nodes": 0, "certificate": "at the limit",
