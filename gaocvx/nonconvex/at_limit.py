@@ -1,7 +1,8 @@
 """The flat beam at the limit: ``w = 0`` certified in closed form, without load, at ``P = P_bar_h``.
 
-Without load, obstacle or bonded bed, ``w = 0`` is an exact equilibrium (every
-part of the gradient vanishes there), and below ``lambda_1`` the unique
+Without load or bonded bed, ``w = 0`` is an exact equilibrium (every part of
+the gradient vanishes there; an obstacle or channel, its gaps at least 0,
+admits it and needs no force to hold it), and below ``lambda_1`` the unique
 minimiser.  Exactly at the limit it is a quartic minimum: no second-order
 certificate proves it, and the branch and bound's points a round-off from it
 (5.7e-9 m on a P4 beam) failed their certificates; the answer was `inaccurate`
@@ -12,7 +13,8 @@ form, 5-point Gauss: exact) and ``lambda_1 >= lower`` (the enclosure of
 :mod:`gaocvx.limit.enclosure`), the bending energy is at least
 ``lower S / 2``; the Gao term ``a/12 ∫ w'^4`` is at least ``a S^2 / 12``
 (Cauchy-Schwarz on the unit length, with the same quadrature); a foundation's
-term is not negative.  So, with ``delta = max(p - lower, 0)``::
+term is not negative.  So, with ``delta = max(p - lower, 0)``, on every beam
+(an obstacle's admissible ones among them)::
 
     Pi(u) >= -delta S / 2 + a S^2 / 12 >= -3 delta^2 / (4 a),
 
@@ -20,7 +22,9 @@ and every beam of energy at most 0 (every minimiser) has ``S <= 6 delta / a``,
 so ``max |w| <= sqrt(6 delta / a)`` (``|w(x)| <= ∫|w'| <= sqrt(S)``, w = 0 at
 x = 0 for every support).  So does every equilibrium, more so: the gradient's
 work on the beam itself, ``u'Ku - p S + a/3 ∫ w'^4`` plus the foundation's
-(not negative), is 0 there, so ``a S^2 / 3 <= delta S`` and ``S <= 3 delta /
+(not negative), is 0 there (with an obstacle or channel at most 0: it is
+``lam' g - mu' g_above`` for the forces ``lam, mu >= 0`` below and above, and
+``g <= 0 <= g_above``), so ``a S^2 / 3 <= delta S`` and ``S <= 3 delta /
 a``; ``w = 0`` is the only equilibrium to within that
 (:func:`.stationary.equilibria`).
 
@@ -54,7 +58,7 @@ import time
 
 import numpy as np
 
-from ..certificate import answer, certify
+from ..certificate import answer, certify, passes
 from ..mixed import MixedForm
 from .polish import to_mixed
 
@@ -96,22 +100,25 @@ def flat_at_limit(dp, modes):
     -------
     tuple or None
         ``(dp, raw, info)`` as :func:`.minimum.solve_global`, where the scene has
-        no load, obstacle or bonded bed, has the Gao term, and ``p`` lies within
+        no load or bonded bed, has the Gao term, and ``p`` lies within
         AT_LIMIT of ``lambda_1`` (the module's notes); else None.
     """
     t0 = time.perf_counter()
-    mf = MixedForm(dp)
-    if (mf.has_load or dp.contact == "obstacle" or getattr(dp, "bilateral", False)
-            or not dp.a > 0):
+    obstacle = dp.contact == "obstacle"
+    mf = MixedForm.on_obstacle(dp) if obstacle else MixedForm(dp)
+    if mf.has_load or getattr(dp, "bilateral", False) or not dp.a > 0:
         return None
     delta, relative = distance_bound(dp)
     reach = math.sqrt(6.0 * delta / dp.a) * dp.W     # [m]: every minimiser's max |w|
     if not (delta <= AT_LIMIT * dp.p and reach <= REACH * dp.L):
         return None
     z = mf.on_manifold(to_mixed(mf, np.zeros(dp.n)))
-    residual = certify(mf, z, None)
+    lam = mf.no_contact_forces()      # (an obstacle or channel holds w = 0 with none)
+    residual = certify(mf, z, lam)
+    if not passes(residual):          # (w = 0 inadmissible: no gap below 0 gets here)
+        return None
     gap = 0.75 * delta * delta / dp.a          # the lower bound's distance below Pi(0) = 0
-    raw = answer(mf, z, None, residual,
+    raw = answer(mf, z, lam, residual,
                  f"global: w = 0, without load at the limit (P above lambda_1 by at most "
                  f"{delta / dp.p:.1g} of it, by its enclosure): every minimiser within "
                  f"{relative:.1g} of it, against the beam buckled at twice the limit, and "
