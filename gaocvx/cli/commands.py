@@ -96,8 +96,10 @@ def _cmd_verify(args) -> int:
         print(f"energy        {report['energy']:.8g} J (ground truth {report['energy_reference']:.8g} J"
               f", {report['reference']['elements']} elements, {report['reference']['method']})")
         print(f"energy gap    {report['energy_gap']:.4g} J (relative {report['energy_gap_rel']:.3g})")
+        many = report["reference"]["minimisers"]
         print(f"max |w error| {report['max_error']:.4g} m (relative {report['max_error_rel']:.3g})"
-              f" at x = {report['max_error_x']:.6g} m")
+              f" at x = {report['max_error_x']:.6g} m"
+              + (f", against the nearest of {many} global minimisers" if many > 1 else ""))
         if report["boundary_violation"] > 1e-9:
             print(f"note          support conditions violated by {report['boundary_violation']:.3g}"
                   " (relative to max |w|)")
