@@ -38,7 +38,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import fem
-from .errors import SceneError
+from .errors import SceneError, apart
 from .hermite import CONTACT_POINTS, HermiteEnergy
 from .linalg import BandedCholesky
 from .scene import Scene
@@ -149,9 +149,10 @@ class DiscreteProblem(HermiteEnergy):
             c = self.c if np.ndim(self.c) == 0 else \
                 np.asarray(self.c).reshape(self.n_nodes - 1, CONTACT_POINTS).min(axis=1)
             if not BondedLimit(self.xi, self.scene.beam.supports, c).prove_below(self.p):
+                P, limit = apart(self.P, self.P_hat_h)
                 raise SceneError(
-                    "load.axial", f"P = {self.P:.4g} N is not provably below the convexity "
-                    f"limit P_hat_h = {self.P_hat_h:.4g} N of the beam on its bonded "
+                    "load.axial", f"P = {P} N is not provably below the convexity "
+                    f"limit P_hat_h = {limit} N of the beam on its bonded "
                     f"foundation (P_bar_h = {self.P_bar_h:.4g} N without it)",
                     self.P) from None
 

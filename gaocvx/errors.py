@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import reprlib
 
-__all__ = ["SceneError", "SolverError", "format_value"]
+__all__ = ["SceneError", "SolverError", "format_value", "apart"]
 
 
 # Containers are shown only a few levels deep and a few items long: a value nested
@@ -63,6 +63,26 @@ def format_value(value) -> str:
     except (RecursionError, ValueError):  # pragma: no cover - defensive
         text = f"<{type(value).__name__}>"
     return text if len(text) <= 80 else text[:77] + "..."
+
+
+def apart(a: float, b: float, digits: int = 4) -> tuple[str, str]:
+    """``a`` and ``b`` in ``g`` format with ``digits`` significant digits, or as many
+    more as tell them apart (a force and the limit it lies above).
+
+    Examples
+    --------
+    >>> apart(5e9, 4.672e9)
+    ('5e+09', '4.672e+09')
+    >>> apart(1.16801e9, 1168002927.17)     # 1.168e+09 twice at 4 digits
+    ('1.16801e+09', '1.16800e+09')
+    """
+    for n in range(digits, 18):
+        # (beyond ``digits`` with the trailing zeros: 1.16800e+09, not 1.168e+09)
+        form = f".{n}g" if n == digits else f"#.{n}g"
+        left, right = format(a, form), format(b, form)
+        if left != right or a == b:
+            break
+    return left, right
 
 
 class SceneError(ValueError):

@@ -105,6 +105,15 @@ def test_convexity_limit_message(capsys, scene):
     assert data["method"] == "global" and data["global"]["unstable_modes"] >= 1
 
 
+def test_a_force_just_above_the_limit_is_told_apart_from_it(capsys, scene):
+    """P and P_bar_h in the refusal are printed with digits enough to differ (a new
+    user's trial: "P = 1.168e+09 N is not below ... P_bar_h = 1.168e+09 N")."""
+    code, _, err = run(capsys, "solve", scene, "--set", "load.axial=4.67202e9", "--method",
+                       "newton")
+    assert code == 2
+    assert "P = 4.67202e+09 N is not below the convexity limit P_bar_h = 4.67201e+09 N" in err
+
+
 def test_several_scenes_json_lines(capsys, scene, tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text(SCENE.replace("nu = 0.3", "nu = 3"))

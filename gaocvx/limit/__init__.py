@@ -52,7 +52,7 @@ True
 
 from __future__ import annotations
 
-from ..errors import SceneError
+from ..errors import SceneError, apart
 from .element import CONTINUUM, continuum_eigenvalues
 from .enclosure import Enclosure
 from .pencil import ConvexityLimit
@@ -95,10 +95,11 @@ def check(dp) -> None:
     enc = lim.enclosure()
     what = "is not below" if verdict == "not below" else \
         f"is not provably below (within the enclosure's {enc.error:.1g} relative error of)"
+    P, limit = apart(dp.P, _to_newtons(dp, enc.value))
     raise SceneError(
         "load.axial",
-        f"P = {dp.P:.4g} N {what} the convexity limit P_bar_h = "
-        f"{_to_newtons(dp, enc.value):.4g} N for {beam.supports} "
+        f"P = {P} N {what} the convexity limit P_bar_h = "
+        f"{limit} N for {beam.supports} "
         f"(continuum P_bar = {beam.P_bar():.4g} N)"
         + ("; the global method (method 'global', or 'auto') solves the Gao beam there"
            if dp.needs_gao else ""),

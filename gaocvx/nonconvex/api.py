@@ -21,7 +21,7 @@ import logging
 import time
 
 from ..discrete import DiscreteProblem
-from ..errors import SceneError
+from ..errors import SceneError, apart
 from ..result import extremum
 
 __all__ = ["above_limit", "provably_convex", "solve_global_result"]
@@ -59,9 +59,11 @@ def _statement(dp) -> str:
     a bonded bed's limit is P_hat_h, which the bed raises)."""
     beam = dp.scene.beam
     if getattr(dp, "bilateral", False):
-        return (f"P = {dp.P:.4g} N is not below the bonded beam's convexity limit "
-                f"P_hat_h = {dp.P_hat_h:.4g} N for {beam.supports}")
-    return (f"P = {dp.P:.4g} N is not below the convexity limit P_bar_h = {dp.P_bar_h:.4g} N "
+        P, limit = apart(dp.P, dp.P_hat_h)
+        return (f"P = {P} N is not below the bonded beam's convexity limit "
+                f"P_hat_h = {limit} N for {beam.supports}")
+    P, limit = apart(dp.P, dp.P_bar_h)
+    return (f"P = {P} N is not below the convexity limit P_bar_h = {limit} N "
             f"for {beam.supports} (continuum P_bar = {beam.P_bar():.4g} N)")
 
 

@@ -29,7 +29,7 @@ import math
 
 import numpy as np
 
-from ..errors import SceneError
+from ..errors import SceneError, apart
 
 __all__ = ["t_max", "amplitude_box", "equilibrium_box", "check_bounded", "zoom_boxes",
            "mode_amplitudes", "estimate_boxes"]
@@ -55,10 +55,12 @@ def check_bounded(dp) -> None:
         return
     model = dp.scene.beam.model
     why = ("the Euler-Bernoulli energy" if model != "gao" else "this Gao beam (E_alpha = 0)")
-    limit = f"the convexity limit P_bar_h = {dp.P_bar_h:.4g} N"
+    P, value = apart(dp.P, dp.P_bar_h)
+    limit = f"the convexity limit P_bar_h = {value} N"
     if dp.contact == "foundation" and getattr(dp, "bilateral", False):
         held = "its bonded foundation holds it only up to P_hat_h"
-        limit = f"the bonded beam's convexity limit P_hat_h = {dp.P_hat_h:.4g} N"
+        P, value = apart(dp.P, dp.P_hat_h)
+        limit = f"the bonded beam's convexity limit P_hat_h = {value} N"
     elif dp.contact == "foundation":
         held = "a unilateral foundation cannot stop the beam buckling upwards"
     elif dp.contact == "obstacle" and getattr(dp, "g_above", None) is None:
@@ -70,13 +72,13 @@ def check_bounded(dp) -> None:
         # mode amplitudes, the scale of the certified gap and the one-mode
         # estimate all come from the quartic term (a trial without it certified a
         # gap of 867 J as 0 of the scale): refused, for what it is.
-        raise SceneError("load.axial", f"P = {dp.P:.4g} N is at or above {limit}, where "
+        raise SceneError("load.axial", f"P = {P} N is at or above {limit}, where "
                          f"{why} has no quartic term; a channel bounds it from below (a "
                          "minimiser exists), but the global method bounds the buckling "
                          "amplitudes by the quartic term and does not take this scene", dp.P)
     else:
         held = "nothing stops the buckling amplitude"
-    raise SceneError("load.axial", f"P = {dp.P:.4g} N is at or above {limit}, where {why} has "
+    raise SceneError("load.axial", f"P = {P} N is at or above {limit}, where {why} has "
                      f"no quartic term and is unbounded below ({held}): there is no minimiser",
                      dp.P)
 
