@@ -132,7 +132,8 @@ BAD_FORCES = [(["a", "b"], "P_values[0]"), ([True], "P_values[0]"),
               ([0.0, math.nan], "P_values[1]"), ([math.inf], "P_values[0]"),
               (np.array([0.0, -np.inf]), "P_values[1]"), ("12", "P_values"),
               ({"P": 1.0}, "P_values"), (None, "P_values"), (True, "P_values"),
-              (np.array([[0.0, 1.0]]), "P_values[0]")]
+              (np.array([[0.0, 1.0]]), "P_values[0]"),
+              ([], "P_values"), (np.array([]), "P_values")]   # (a new user's trial: no force)
 
 
 @pytest.mark.parametrize("P_values, key", BAD_FORCES, ids=[repr(b[0]) for b in BAD_FORCES])

@@ -247,13 +247,16 @@ def equilibrium_path(scene, P_values, elements: int | None = None, x_c: float | 
     SceneError
         Before any work, naming the argument (``scene``, ``P_values[i]``,
         ``elements``, ``x_c``) and the offending value; a force given twice
-        is refused naming its second place, ``P_values[j]``.
+        is refused naming its second place, ``P_values[j]``, and no force at
+        all naming ``P_values``.
     """
     from ..scene import check_solve_arguments, number, numbers_of
     from .stationary import equilibria
 
     scene = check_solve_arguments(scene, "global", elements)
     P_values = numbers_of("P_values", P_values)
+    if not P_values:   # (a path of no force: surely not what was meant)
+        raise SceneError("P_values", "must hold at least one axial force", [])
     first = {}
     for j, P in enumerate(P_values):
         i = first.setdefault(P, j)
