@@ -33,12 +33,12 @@ few times the enclosure's width, 2e-14 to 3e-14, and the data's round-off:
 the window within which no computation in double precision tells ``p`` from
 ``lambda_1``) and ``sqrt(6 delta / a)`` at most REACH of the length (a weak
 Gao term leaves the buckled beam astronomically large).  Every minimiser then
-lies within ``sqrt(2 delta / lambda_1)``
-(4.5e-7 at most) of ``w = 0``, measured as ``sqrt(S)`` against ``sqrt(3
-lambda_1 / a)``, the minimum of the same bound at twice the limit load (the
-beam buckled there has a smaller ``S``, by ``∫ phi'^4 / (∫ phi'^2)^2``, 1.5 for
-a sine); the energy within ``3 delta^2 / (4 a)``.  Beyond the window the branch
-and bound runs, as for any ``P``.
+lies within ``sqrt(2 delta / lambda_1)`` (4.5e-7 at most) of ``w = 0``,
+measured as ``sqrt(S)`` against ``sqrt(3 lambda_1 / a)``, the minimum of the
+same bound at twice the limit load (the beam buckled there has a smaller
+``S``, by ``∫ phi'^4 / (∫ phi'^2)^2``, 1.5 for a sine); its energy within
+``3 delta^2 / (4 a)``.  Beyond the window the branch and bound runs, as for
+any ``P``.
 
 Examples
 --------
