@@ -125,6 +125,13 @@ def test_sweep_without_contact_has_no_contact_numbers(tmp_path, capsys):
     rows = list(csv.DictReader(csv_path.open()))
     assert [(r["contact_length"], r["contact_zones"], r["penetration"]) for r in rows] == [
         ("", "", "")] * 2
+    # the table has max w beside min w (a beam buckled upwards has min w 0)
+    assert table[0].split()[:10] == ["value", "status", "min", "w", "[m]", "at", "x", "max",
+                                     "w", "[m]"]
+    for line, r in zip(table[1:], rows):
+        cells = line.split()
+        assert float(cells[2]) == pytest.approx(float(r["min_w"]), rel=1e-5)
+        assert float(cells[4]) == pytest.approx(float(r["max_w"]), rel=1e-5, abs=1e-300)
     assert main(["solve", str(path), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["contact"] == {"zones": None, "reaction": None}
 

@@ -66,8 +66,10 @@ def _cmd_sweep(args) -> int:
             print(record, flush=True)
     columns = ["value"] if keys is None else list(keys)
     if not args.json:
+        # (max w too: a beam buckled upwards has min w 0 -- a new user's trial)
         print(" ".join(f"{c:>22s}" for c in columns) + f" {'status':10s} {'min w [m]':>12s} "
-              f"{'at x':>7s} {'energy [J]':>12s} {'contact [m]':>11s} {'zones':>5s}")
+              f"{'at x':>7s} {'max w [m]':>12s} {'at x':>7s} {'energy [J]':>12s} "
+              f"{'contact [m]':>11s} {'zones':>5s}")
         for r in rows:
             at = " ".join(f"{r[c]:22.6g}" for c in columns)
             if r["status"] == "error":
@@ -76,7 +78,7 @@ def _cmd_sweep(args) -> int:
                 contact = (f"{r['contact_length']:11.4g} {r['contact_zones']:5d}"
                            if "contact_zones" in r else f"{'-':>11s} {'-':>5s}")
                 print(f"{at} {r['status']:10s} {r['min_w']:12.6g} {r['min_x']:7.4g} "
-                      f"{r['energy']:12.6g} {contact}")
+                      f"{r['max_w']:12.6g} {r['max_x']:7.4g} {r['energy']:12.6g} {contact}")
     if args.csv:
         fields = [*columns, "status", "method", "min_w", "min_x", "max_w", "max_x", "energy",
                   "contact_length", "contact_zones", "penetration", "time_s", "error"]
