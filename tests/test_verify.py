@@ -116,3 +116,19 @@ def test_a_mirror_image_minimiser_is_measured_against_its_own_image():
         assert r["max_error_rel"] < 1e-4 and abs(r["energy_gap_rel"]) < 1e-4
     assert {r["reference"]["nearest"] for r in reports} == {0, 1}
     assert reports[0]["max_error_rel"] == pytest.approx(reports[1]["max_error_rel"], rel=1e-6)
+
+
+def test_an_uncertified_ground_truth_lends_no_other_minimiser(monkeypatch):
+    """Where the ground truth is `inaccurate` (its search cut to 3 node programs), its
+    other points are candidates, not minimisers: the result is measured against its
+    answer alone, and the report says the ground truth was not certified."""
+    import gaocvx.nonconvex.minimum as minimum
+
+    monkeypatch.setattr(minimum, "MAX_NODES", 3)
+    monkeypatch.setattr(minimum, "DUAL_BOUND", False)
+    scene = Scene.from_dict(scene_dict("P4", q=None, axial=1.3e9, elements=8))
+    r = solve(scene, "global", elements=16)
+    assert r.status == "inaccurate" and r.extra["global"]["alternatives"]
+    report = verify(scene, r.x, r.w, r.slope, reference_elements=16)
+    assert report["reference"]["status"] == "inaccurate"
+    assert report["reference"]["minimisers"] == 1 and report["reference"]["nearest"] == 0
