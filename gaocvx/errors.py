@@ -75,11 +75,14 @@ def apart(a: float, b: float, digits: int = 4) -> tuple[str, str]:
     ('5e+09', '4.672e+09')
     >>> apart(1.16801e9, 1168002927.17)     # 1.168e+09 twice at 4 digits
     ('1.16801e+09', '1.16800e+09')
+    >>> apart(999999999, 1e9)
+    ('999999999', '1.00000000e+09')
     """
     for n in range(digits, 18):
         # (beyond ``digits`` with the trailing zeros: 1.16800e+09, not 1.168e+09)
         form = f".{n}g" if n == digits else f"#.{n}g"
-        left, right = format(a, form), format(b, form)
+        # (the "#" form ends a whole number with its point: 999999999.)
+        left, right = (format(v, form).rstrip(".") for v in (a, b))
         if left != right or a == b:
             break
     return left, right
