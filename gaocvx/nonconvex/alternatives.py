@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 from .bnb import components
-from .polish import feasible_energy, polish, reflections, zero_floor
+from .polish import feasible_energy, polish, reflections, size_floor
 
 __all__ = ["other_minimisers", "NEAR_LEAVES", "DISTINCT"]
 
@@ -72,7 +72,7 @@ def other_minimisers(dp, prog, out, best, lo, hi, tol):
     # Sizes are at least the certificate's zero floor: below it every deflection is
     # zero (a P4 beam pressed flat at gap 0 had three polished points of 1e-21 of
     # it, each "distinct" relative to its own size: not unique was reported).
-    floor = zero_floor(dp)
+    floor = size_floor(dp)
     norm = lambda x: math.sqrt(max(float(x @ (dp.G @ x)), 0.0))  # noqa: E731
     size_of = lambda x: max(norm(x), floor)  # noqa: E731
 

@@ -21,7 +21,7 @@ from ..mixed import MixedForm
 from ..certificate import passes
 from .certificate import certify_answer, certify_flat, contact_polish
 
-__all__ = ["to_mixed", "polish", "feasible_energy", "zero_floor", "reflections",
+__all__ = ["to_mixed", "polish", "feasible_energy", "size_floor", "reflections",
            "answer_certificate", "search_best", "flat_answer", "SLACK"]
 
 log = logging.getLogger(__name__)
@@ -103,7 +103,7 @@ def feasible_energy(dp, prog):
         return getattr(prog, "energy", dp.energy)
 
     base = getattr(prog, "energy", dp.energy)   # the fast path's: in the mixed form
-    floor = zero_floor(dp)
+    floor = size_floor(dp)
 
     def energy(u):
         return math.inf if _inside(prog, u, floor) else base(u)
@@ -133,14 +133,14 @@ def polish(dp, prog, s, u, lam, lo, hi):
 
 def _violates(dp, prog, u) -> bool:
     """``u`` lies inside the obstacle by more than 1e-9 of its size (at least the
-    zero floor of the certificate, :attr:`MixedForm.zero_floor`: a beam pressed
-    flat at gap 0 has no size of its own)."""
-    return _inside(prog, u, zero_floor(dp))
+    certificate's floor, :func:`size_floor`: a beam pressed flat at gap 0 has no
+    size of its own)."""
+    return _inside(prog, u, size_floor(dp))
 
 
-def zero_floor(dp) -> float:
-    """The certificate's zero floor (:attr:`MixedForm.size_floor`; 0 without load):
-    deflections below it are zero to the certificate."""
+def size_floor(dp) -> float:
+    """:attr:`MixedForm.size_floor` of ``dp`` with an obstacle (the zero floor where a
+    load acts, else 0): deflections below it are zero to the certificate."""
     return MixedForm.on_obstacle(dp).size_floor
 
 
