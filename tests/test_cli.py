@@ -83,6 +83,8 @@ def test_bad_input_exit_2_names_key(capsys, scene, argv, key):
     (["path", "{scene}", "--axial", "0:1e9:2", "--at", "abc"],
      "error: --at: must be a number (got 'abc')"),
     (["verify", "{scene}", "--max-gap", "1e"], "error: --max-gap: must be a number (got '1e')"),
+    (["path", "{scene}", "--axial", "0:1e9:2", "--at", "a'b"],
+     "error: --at: must be a number (got \"a'b\")"),
     (["sweep", "{scene}", "--vary", "load.q=0:1:2", "--jobs", "x"],
      "error: --jobs: must be a whole number (got 'x')"),
 ])

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import ast
 import json
 import logging
 import math
@@ -25,9 +26,13 @@ class _Parser(argparse.ArgumentParser):
         # A value of the wrong type names its option and the value, as every other
         # bad input does ("--at: must be a number (got 'abc')", not argparse's
         # "argument --at: invalid float value: 'abc'")
-        bad = re.fullmatch(r"argument (\S+): invalid (float|int) value: '(.*)'", message)
+        bad = re.fullmatch(r"argument (\S+): invalid (float|int) value: (.*)", message)
         if bad:
             option, kind, value = bad.groups()
+            try:   # (argparse shows the value's repr: "a'b" in double quotes)
+                value = ast.literal_eval(value)
+            except (ValueError, SyntaxError):
+                pass
             raise SceneError(option.split("/")[-1], "must be a number" if kind == "float"
                              else "must be a whole number", value)
         raise SceneError("arguments", message)
