@@ -213,6 +213,40 @@ def test_slices_by_the_whole_bordered_system_agree_with_the_dense_programs(suppo
     _slices_agree(fast, dense, k, np.random.default_rng(2))
 
 
+def test_a_failed_banded_slice_hands_over_to_the_bordered_ones_for_a_while(monkeypatch):
+    """After a banded slice fails, the bordered system solves the next BORDERED_SLICES
+    slices, then the banded ones are tried again (a five-mode bonded bed had switched
+    for good at its 40880th of 62914 slices: 50 s against 41 s), twice as long at
+    every new failure; the answers stay the dense programs'."""
+    from gaocvx.nonconvex import fast as fast_module
+
+    monkeypatch.setattr(fast_module, "BORDERED_SLICES", 3, raising=False)
+    dp, m, fast, dense = _programs("P1", 1.1e10, 16, q=-5e7)
+    banded = fast_module.FastProgram._slice
+    fail = {"left": 2}
+    modes_used = []
+
+    def slice_(self, s, z, max_iter=60):
+        modes_used.append(self.bordered)
+        if not self.bordered and fail["left"] and len(modes_used) in (1, 7):
+            fail["left"] -= 1
+            return z, np.zeros(self.k), np.full((self.k, self.k), np.nan), False
+        return banded(self, s, z, max_iter)
+
+    monkeypatch.setattr(fast_module.FastProgram, "_slice", slice_)
+    fast = fast_module.FastProgram(dp, m)
+    rng = np.random.default_rng(5)
+    for _ in range(14):
+        s = rng.uniform(-2.0, 2.0, size=m.k)
+        F, dF, u, ok = fast.reduced(s)
+        G, dG, _, _ = dense.reduced(s)
+        assert ok and F == pytest.approx(G, rel=1e-9, abs=1e-9)
+    # solve 1: banded, failed, bordered; 2-4 bordered; 5 banded; 6 banded, failed,
+    # bordered; 7-12 bordered (twice as many); 13-14 banded
+    B, T = False, True
+    assert modes_used == [B, T, T, T, T, B, B, T] + [T] * 6 + [B, B]
+
+
 @pytest.mark.slow
 def test_slices_just_above_the_limit_on_a_fine_mesh_converge():
     """A helper's campaign (seed 9301, B2): P4 on a unilateral bed 3e-5 above the

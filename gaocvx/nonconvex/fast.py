@@ -59,6 +59,9 @@ BOUND_TOL = 1e-14
 # What a node's bound allows for the slice solves' own accuracy (Newton to
 # round-off, ~1e-16 of the energy), relative to its value.
 SLICE_ACCURACY = 1e-13
+# Slices by the whole bordered system after a banded one fails, before the banded
+# ones are tried again (doubled at every failure: FastProgram.reduced_hessian).
+BORDERED_SLICES = 64
 
 
 class FastProgram:
@@ -90,6 +93,8 @@ class FastProgram:
         self.bordered = False  # slices by the whole bordered system (_bordered_step)
         self._border = None    # its sparsity pattern, built at the first such step
         self._slice_energy = None  # Pi of the last slice's z, where its search had it
+        # (set by hand, bordered stays: a test of the bordered slices)
+        self._bordered_until, self._bordered_run = math.inf, BORDERED_SLICES
 
     def energy(self, u) -> float:
         """The energy of free Hermite DOFs ``u`` in the mixed form (non-dimensional)."""
@@ -239,15 +244,23 @@ class FastProgram:
         # start at w = 0 stalled the node bounds, campaign scene 8:3.)
         zero = not np.any(s0) and not self.mf.has_load
         start = np.zeros(self.mf.n) if zero else self._z.copy()
+        if self.bordered and self.solves > self._bordered_until:
+            self.bordered = False    # the banded slices tried again
         z, nu, hess, ok = self._slice(s0, start)
         if not np.all(np.isfinite(z)):
             start = np.zeros(self.mf.n)
             z, nu, hess, ok = self._slice(s0, start)
         if not ok and not self.bordered:
             # (the Schur complement's round-off, :meth:`_bordered_step`: the whole
-            # bordered system from now on; a failure for another reason costs only
-            # time, 1.6 to 6 times a banded slice)
+            # bordered system, for the next BORDERED_SLICES solves, twice as many
+            # at every new failure.  Just above the limit every banded slice fails,
+            # and each retry costs a failed slice; elsewhere one slice may fail
+            # for another reason, and the bordered ones cost 1.2 to 6 times more:
+            # a five-mode bonded bed switched at its 40880th of 62914, 50 s with
+            # the rest bordered, 41 s with that slice alone.)
             self.bordered = True
+            self._bordered_until = self.solves + self._bordered_run
+            self._bordered_run *= 2
             z, nu, hess, ok = self._slice(s0, start)
         self._z = z
         F = self._slice_energy
