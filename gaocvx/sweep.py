@@ -113,9 +113,17 @@ def count_of(text: str) -> int:
     try:
         return int(text)
     except ValueError:
-        value = float(text)   # (a ValueError of its own for "abc")
-        if not value.is_integer():   # (inf and nan are not)
+        # (read exactly: as a float "3.0000000000000001" was 3)
+        try:
+            value = decimal.Decimal(text.strip())
+        except decimal.InvalidOperation:
             raise ValueError(text) from None
+        if not value.is_finite() or value != value.to_integral_value():
+            raise ValueError(text) from None
+        # (1e1000000000 is whole too, but its int has a billion digits: any count
+        # beyond 1e30 is as far beyond every caller's limit)
+        if value.adjusted() > 30:
+            return 10 ** 31 if value > 0 else -10 ** 31
         return int(value)
 
 

@@ -282,11 +282,17 @@ def test_an_axial_range_takes_num_written_as_a_whole_float(eb_file, capsys):
 
     assert parse_range("0:2e9:3.0").tolist() == parse_range("0:2e9:3").tolist() == [0.0, 1e9, 2e9]
     assert sweep_range("0:2:3.0").tolist() == sweep_range("0:2:3e0").tolist() == [0.0, 1.0, 2.0]
-    for bad in ("0:2:2.5", "0:2:inf", "0:2:nan", "0:2:x"):
+    for bad in ("0:2:2.5", "0:2:inf", "0:2:nan", "0:2:x", "0:2:3.0000000000000001"):
         with pytest.raises(SceneError, match="NUM a whole number"):
             sweep_range(bad)
         with pytest.raises(SceneError, match="NUM a whole number"):
             parse_range(bad)
+    # a whole number far beyond the limits is refused as such, at once (not its
+    # billion-digit int)
+    with pytest.raises(SceneError, match="NUM must be between 1 and"):
+        sweep_range("0:2:1e1000000000")
+    with pytest.raises(SceneError, match="1 <= NUM <="):
+        parse_range("0:2:1e1000000000")
 
 
 @pytest.mark.parametrize("text, says", [
