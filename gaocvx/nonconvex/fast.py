@@ -62,6 +62,14 @@ SLICE_ACCURACY = 1e-13
 # Slices by the whole bordered system after a banded one fails, before the banded
 # ones are tried again (doubled at every failure: FastProgram.reduced_hessian).
 BORDERED_SLICES = 64
+# A box whose value lies below the branch and bound's cutoff is split whatever its
+# exact bound: its projected Newton stops once the bound lies within this fraction
+# of the value's distance from the cutoff (the bound is one at any point, and
+# orders the boxes).  Measured on the four-to-six-mode scenes of
+# benchmarks/nonconvex.py modes and P1 at 5 P_bar_h (k = 3), in one run: 1.2 to 2.2
+# times faster at 0.5 (1 to 2 % more nodes or fewer, the same certified energies
+# to 1e-15); most of a many-mode search's boxes are such, and took 4 to 50 slices.
+EARLY = 0.5
 
 
 class FastProgram:
@@ -285,7 +293,9 @@ class FastProgram:
         :data:`BOUND_TOL` of ``G(s0)``, or as soon as it lies above ``cutoff``:
         the branch and bound closes such a box whatever its exact minimum (far
         boxes, most of a many-mode search, then take one or two slice solves
-        instead of a dozen).
+        instead of a dozen), or once its value lies below ``cutoff`` and the
+        bound within :data:`EARLY` of the distance between them: such a box is
+        split whatever its exact minimum.
         """
         lo, hi = np.asarray(lo, float), np.asarray(hi, float)
         c = np.asarray(self.modes.c, float)
@@ -308,6 +318,8 @@ class FastProgram:
             if value - lower <= BOUND_TOL * max(abs(value), 1.0) or \
                     lower - SLICE_ACCURACY * max(abs(value), 1.0) > cutoff:
                 break
+            if value < cutoff < math.inf and value - lower <= EARLY * (cutoff - value):
+                break     # (to be split: EARLY's notes)
             d = box_qp(hess, grad, lo - s, hi - s)
             t, slope_d = 1.0, float(grad @ d)
             while True:
