@@ -314,7 +314,7 @@ def test_box_qp_meets_its_optimality_conditions_up_to_seven_modes():
     """The active-set box QP: feasible, and its KKT conditions hold (a bound's
     multiplier has the right sign, the gradient vanishes on free coordinates);
     its value is that of trying every face."""
-    from gaocvx.nonconvex.fast import _box_qp_faces, box_qp
+    from gaocvx.nonconvex.slice_algebra import _box_qp_faces, box_qp
 
     rng = np.random.default_rng(7)
     for k in range(1, 8):
