@@ -9,6 +9,7 @@ slope changes sign once per equilibrium.
 """
 
 import json
+import logging
 from types import SimpleNamespace
 
 import numpy as np
@@ -360,7 +361,8 @@ def test_a_list_without_a_stable_equilibrium_is_inaccurate(monkeypatch):
     assert all(e.status == "inaccurate" for e in eqs)
 
 
-def test_two_minima_without_an_unstable_equilibrium_between_them_are_inaccurate(monkeypatch):
+def test_two_minima_without_an_unstable_equilibrium_between_them_are_inaccurate(monkeypatch,
+                                                                                  caplog):
     """Between two strict minima of the coercive energy lies an unstable equilibrium
     (mountain pass): a list of minima only is missing one or has a stability wrong.
     Without load above the limit the list is the two mirror minima and the flat
@@ -374,9 +376,13 @@ def test_two_minima_without_an_unstable_equilibrium_between_them_are_inaccurate(
     assert all(e.status == "optimal" for e in eqs)
     monkeypatch.setattr(st, "classify", lambda dF, r, h: (True, 1.0))
     _no_whole_beam_stability(monkeypatch)
-    eqs = equilibria(scene)
+    with caplog.at_level(logging.WARNING, logger="gaocvx.nonconvex.equilibrium"):
+        eqs = equilibria(scene)
     assert len(eqs) == 3 and all(e.stable for e in eqs)
     assert all(e.status == "inaccurate" for e in eqs)
+    # (proven complete: what is missing is within the merging distance, if anything)
+    assert all(e.complete for e in eqs)
+    assert "one within the merging distance of a listed one is missing" in caplog.text
 
 
 def _no_whole_beam_stability(monkeypatch):
