@@ -559,3 +559,31 @@ def test_at_the_limit_a_weak_gao_term_is_no_flat_certificate():
         if taken:   # every minimiser within the reach the message states, in metres
             reach = float(re.search(r"within ([0-9.e+-]+) m;", out[1]["message"]).group(1))
             assert 0.0 < reach <= 1e-6 * d["beam"]["length"]
+
+
+def test_a_search_without_any_lower_bound_says_no_gap_is_certified(tmp_path, capsys, monkeypatch):
+    """Where no leaf has a bound (every node program failed), the message said
+    "certified gap inf J (inf of the energy scale)", which reads as a certificate (a
+    campaign: a channel at P_bar_h, 1975 node programs not solved).  It says that no
+    gap is certified; the status is `inaccurate` and the JSON stays valid."""
+    import dataclasses
+
+    import gaocvx.nonconvex.minimum as minimum
+
+    real = minimum.branch_and_bound
+
+    def unbounded(*args, **kw):
+        out = real(*args, **kw)
+        return dataclasses.replace(out, lower=-math.inf, failed=out.nodes)
+
+    monkeypatch.setattr(minimum, "branch_and_bound", unbounded)
+    monkeypatch.setattr(minimum, "DUAL_BOUND", False)
+    path = tmp_path / "no_bound.toml"
+    beam = "\n".join(f"{k} = {json.dumps(v)}" for k, v in scene_dict("P4")["beam"].items())
+    path.write_text(f"[beam]\n{beam}\n[load]\nq = -1e7\naxial = 1.3e9\n[mesh]\nelements = 6\n")
+    assert main(["solve", str(path), "--json"]) == 1
+    def strict(name):
+        raise AssertionError(f"not JSON: {name}")
+    record = json.loads(capsys.readouterr().out, parse_constant=strict)
+    assert record["status"] == "inaccurate" and record["global"]["bound_gap"] is None
+    assert "no gap certified" in record["message"] and "inf" not in record["message"]

@@ -444,7 +444,10 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None, stalled=None):
     ok = ok and gap >= -GAP_TOL * max(own, OWN_FLOOR * floor)
     how = (f"branch and bound: {out.nodes} node programs" if out.certificate != "dual bound"
            else "the Gao term's tangents (dual bound)")
-    notes = [f"{how}, certified gap {gap * dp.E0:.3g} J ({gap / scale:.2g} of the energy scale)"]
+    notes = [f"{how}, certified gap {gap * dp.E0:.3g} J ({gap / scale:.2g} of the energy scale)"
+             if math.isfinite(gap) else
+             # (no leaf with a bound: "certified gap inf J" read as a certificate)
+             f"{how}, no gap certified (no lower bound)"]
     if out.stalled:
         notes.append(f"stopped at {out.nodes} nodes: the gap had not halved over "
                      f"{bnb.STALL_NODES}")
