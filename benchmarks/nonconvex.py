@@ -4,6 +4,7 @@
     OPENBLAS_NUM_THREADS=1 python benchmarks/nonconvex.py fine [--output FILE] [--sizes ...] [--cases ...]
     python benchmarks/nonconvex.py paths [--output docs/nonconvex-paths.png] [--elements 12]
     OPENBLAS_NUM_THREADS=1 python benchmarks/nonconvex.py modes [--output FILE] [--sizes 16,32,64]
+    OPENBLAS_NUM_THREADS=1 python benchmarks/nonconvex.py early [--output FILE] [--sizes 16,32]
     OPENBLAS_NUM_THREADS=1 python benchmarks/nonconvex.py dual [--output FILE] [--sizes ...] [--cases ...]
     OPENBLAS_NUM_THREADS=1 python benchmarks/nonconvex.py grid [--output FILE] [--sizes 100,256]
 
@@ -16,7 +17,9 @@ for nonconvex.md's P4 example, the k = 2 P1 example and the P4 obstacle example
 unstable modes (MODE_CASES) at 8 to 64 elements, with the node programs that
 ``solve_global`` picks (the fast path; no second try by the other kind), on
 their own and with basins off (``minimum.BASINS``), both in one run, four of them
-free and two on a bonded bed;
+free and two on a bonded bed; ``early``: the same scenes with a box to be split
+stopping early (``fast.EARLY``) and with its node problem solved to the end,
+in one run;
 ``dual``: the dual bound (:mod:`gaocvx.nonconvex.dual`) against the branch
 and bound alone on the same scene (CASES without obstacle, ``--cases``; the
 fast path), the two run times measured in one run, their ratio and the
@@ -118,19 +121,22 @@ def table(out, cases=CASES, sizes=(8, 16, 32, 64, 128), fast=False):
     _write(lines, out)
 
 
-def _paired(out, cases, sizes, switch, header, row):
-    """Each scene solved with ``minimum.<switch>`` on and off in one run, a row of each pair.
+def _paired(out, cases, sizes, switch, header, row, module=None, values=(True, False)):
+    """Each scene solved with ``module.<switch>`` (``minimum`` by default) set to each of
+    ``values`` (on, off) in one run, a row of each pair.
 
     ``row(label, n, on, off)`` formats a table row from the two :func:`_global` results.
     """
     import gaocvx.nonconvex.minimum as minimum
 
+    module = minimum if module is None else module
+
     def run(s, value):
-        setattr(minimum, switch, value)
+        setattr(module, switch, value)
         try:
             return _global(s, None)
         finally:
-            setattr(minimum, switch, True)
+            setattr(module, switch, values[0])
 
     lines = list(header)
     for label, kw in cases:
@@ -150,6 +156,21 @@ def modes_table(out, cases, sizes):
         f"| {label} | {n} | {a['k']} | {a['nodes']} | {a['time']:.2f} | {a['rel']:.1e} | "
         f"{a['status']} | {b['nodes']} | {b['time']:.2f} | {b['time'] / a['time']:.1f} | "
         f"{abs(a['energy'] - b['energy']) / a['scale']:.1e} |"))
+
+
+def early_table(out, cases, sizes):
+    """A box to be split stopping early (``fast.EARLY``, 0.5) against its projected Newton
+    run to BOUND_TOL (EARLY = 0), the same scenes in one run."""
+    import gaocvx.nonconvex.fast as fast
+
+    header = ["| scene | N | k | nodes | time [s] | gap / scale | status | nodes, EARLY = 0 "
+              "| time, EARLY = 0 [s] | ratio | \\|ΔE\\| / scale |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
+    _paired(out, cases, sizes, "EARLY", header, lambda label, n, a, b: (
+        f"| {label} | {n} | {a['k']} | {a['nodes']} | {a['time']:.2f} | {a['rel']:.1e} | "
+        f"{a['status']} | {b['nodes']} | {b['time']:.2f} | {b['time'] / a['time']:.1f} | "
+        f"{abs(a['energy'] - b['energy']) / a['scale']:.1e} |"),
+        module=fast, values=(fast.EARLY, 0.0))
 
 
 def dual_table(out, cases, sizes):
@@ -241,7 +262,7 @@ DEFAULT_SIZES = "128,512,2048,8192"
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("what", choices=["table", "fine", "paths", "modes", "dual", "grid"])
+    ap.add_argument("what", choices=["table", "fine", "paths", "modes", "early", "dual", "grid"])
     ap.add_argument("--output")
     ap.add_argument("--elements", type=int, default=12)
     ap.add_argument("--sizes", default=DEFAULT_SIZES,
@@ -259,6 +280,9 @@ def main(argv=None):
     elif args.what == "modes":
         sizes = "16,32,64" if args.sizes == DEFAULT_SIZES else args.sizes
         modes_table(args.output, MODE_CASES, tuple(int(n) for n in sizes.split(",")))
+    elif args.what == "early":
+        sizes = "16,32" if args.sizes == DEFAULT_SIZES else args.sizes
+        early_table(args.output, MODE_CASES, tuple(int(n) for n in sizes.split(",")))
     elif args.what == "grid":
         sizes = "100,256" if args.sizes == DEFAULT_SIZES else args.sizes
         grid(args.output, tuple(int(n) for n in sizes.split(",")))
