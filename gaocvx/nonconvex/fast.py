@@ -65,10 +65,11 @@ BORDERED_SLICES = 64
 # A box whose value lies below the branch and bound's cutoff is split whatever its
 # exact bound: its projected Newton stops once the bound lies within this fraction
 # of the value's distance from the cutoff (the bound is one at any point, and
-# orders the boxes).  Measured on the four-to-six-mode scenes of
-# benchmarks/nonconvex.py modes and P1 at 5 P_bar_h (k = 3), in one run: 1.2 to 2.2
-# times faster at 0.5 (1 to 2 % more nodes or fewer, the same certified energies
-# to 1e-15); most of a many-mode search's boxes are such, and took 4 to 50 slices.
+# orders the boxes).  Measured on the four-to-six-mode scenes in one run
+# (benchmarks/nonconvex.py early): 1.8 to 2.4 times faster at 0.5 than at 0, nodes
+# within 3 %, the same certified energies to 3e-16 of the scale; P1 at 5 P_bar_h
+# (k = 3) twice as fast.  Most of a many-mode search's boxes are such, and took 4
+# to 50 slices each.
 EARLY = 0.5
 
 

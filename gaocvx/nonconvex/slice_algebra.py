@@ -25,7 +25,7 @@ __all__ = ["BorderedMatrix", "box_qp"]
 
 
 class BorderedMatrix:
-    """The bordered matrix ``[[A, B'], [B, 0]]`` of :meth:`FastProgram._bordered_step`,
+    """The bordered matrix ``[[A, B'], [B, 0]]`` of :meth:`.fast.FastProgram._bordered_step`,
     its sparsity pattern built once.
 
     ``A`` comes in LAPACK gbtrf band storage ``ab`` (``A[i, j] = ab[lo + up + i - j, j]``;
