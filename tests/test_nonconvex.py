@@ -582,6 +582,7 @@ def test_a_search_without_any_lower_bound_says_no_gap_is_certified(tmp_path, cap
     beam = "\n".join(f"{k} = {json.dumps(v)}" for k, v in scene_dict("P4")["beam"].items())
     path.write_text(f"[beam]\n{beam}\n[load]\nq = -1e7\naxial = 1.3e9\n[mesh]\nelements = 6\n")
     assert main(["solve", str(path), "--json"]) == 1
+
     def strict(name):
         raise AssertionError(f"not JSON: {name}")
     record = json.loads(capsys.readouterr().out, parse_constant=strict)

@@ -207,8 +207,8 @@ def test_fast_node_values_gradients_and_hessians_agree_with_the_dense_programs(s
 def test_a_box_that_cannot_close_stops_once_its_bound_is_known_well_enough():
     """A box whose value lies below the cutoff is split whatever its exact bound: its
     projected Newton stops once the bound is known to within the value's distance from
-    the cutoff (EARLY of it), not to BOUND_TOL (P4 with five modes: 3468 nodes in
-    13.6 s, now about the same nodes in a third of the time).  The bound stays a
+    the cutoff (EARLY of it), not to BOUND_TOL (P4 with five modes: about the same
+    nodes in half the time, benchmarks/nonconvex.py early).  The bound stays a
     bound: below the box's minimum, solved fully."""
     from gaocvx.nonconvex import fast as fast_module
 
