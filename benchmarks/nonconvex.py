@@ -142,20 +142,27 @@ def _paired(out, cases, sizes, switch, header, row, module=None, values=(True, F
     for label, kw in cases:
         for n in sizes:
             s = scene(n=n, **kw)
-            lines.append(row(label, n, run(s, True), run(s, False)))
+            lines.append(row(label, n, run(s, values[0]), run(s, values[1])))
             print(lines[-1], file=sys.stderr, flush=True)
     _write(lines, out)
 
 
-def modes_table(out, cases, sizes):
-    """Four and five modes: the global method with and without basins (same scenes, one run)."""
-    header = ["| scene | N | k | nodes | time [s] | gap / scale | status | nodes without basins "
-              "| time without [s] | ratio | \\|ΔE\\| / scale |",
+def _on_off_table(out, cases, sizes, switch, off, module=None, values=(True, False)):
+    """The global method with ``switch`` on and off (same scenes, one run): nodes, time,
+    gap and status with it, nodes and time without (``off`` names that column), the
+    time ratio and the difference of the two energies."""
+    header = [f"| scene | N | k | nodes | time [s] | gap / scale | status | nodes, {off} "
+              f"| time, {off} [s] | ratio | \\|ΔE\\| / scale |",
               "|---|---|---|---|---|---|---|---|---|---|---|"]
-    _paired(out, cases, sizes, "BASINS", header, lambda label, n, a, b: (
+    _paired(out, cases, sizes, switch, header, lambda label, n, a, b: (
         f"| {label} | {n} | {a['k']} | {a['nodes']} | {a['time']:.2f} | {a['rel']:.1e} | "
         f"{a['status']} | {b['nodes']} | {b['time']:.2f} | {b['time'] / a['time']:.1f} | "
-        f"{abs(a['energy'] - b['energy']) / a['scale']:.1e} |"))
+        f"{abs(a['energy'] - b['energy']) / a['scale']:.1e} |"), module=module, values=values)
+
+
+def modes_table(out, cases, sizes):
+    """Four and five modes: the global method with and without basins (same scenes, one run)."""
+    _on_off_table(out, cases, sizes, "BASINS", "without basins")
 
 
 def early_table(out, cases, sizes):
@@ -163,14 +170,7 @@ def early_table(out, cases, sizes):
     run to BOUND_TOL (EARLY = 0), the same scenes in one run."""
     import gaocvx.nonconvex.fast as fast
 
-    header = ["| scene | N | k | nodes | time [s] | gap / scale | status | nodes, EARLY = 0 "
-              "| time, EARLY = 0 [s] | ratio | \\|ΔE\\| / scale |",
-              "|---|---|---|---|---|---|---|---|---|---|---|"]
-    _paired(out, cases, sizes, "EARLY", header, lambda label, n, a, b: (
-        f"| {label} | {n} | {a['k']} | {a['nodes']} | {a['time']:.2f} | {a['rel']:.1e} | "
-        f"{a['status']} | {b['nodes']} | {b['time']:.2f} | {b['time'] / a['time']:.1f} | "
-        f"{abs(a['energy'] - b['energy']) / a['scale']:.1e} |"),
-        module=fast, values=(fast.EARLY, 0.0))
+    _on_off_table(out, cases, sizes, "EARLY", "EARLY = 0", module=fast, values=(fast.EARLY, 0.0))
 
 
 def dual_table(out, cases, sizes):
