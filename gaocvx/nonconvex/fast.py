@@ -66,8 +66,8 @@ BORDERED_SLICES = 64
 # exact bound: its projected Newton stops once the bound lies within this fraction
 # of the value's distance from the cutoff (the bound is one at any point, and
 # orders the boxes).  Measured on the four-to-six-mode scenes in one run
-# (benchmarks/nonconvex.py early): 1.8 to 2.4 times faster at 0.5 than at 0, nodes
-# within 3 %, the same certified energies to 3e-16 of the scale; P1 at 5 P_bar_h
+# (benchmarks/nonconvex.py early): 1.7 to 2.4 times faster at 0.5 than at 0, nodes
+# within 4 %, the same certified energies to 2e-16 of the scale; P1 at 5 P_bar_h
 # (k = 3) twice as fast.  Most of a many-mode search's boxes are such, and took 4
 # to 50 slices each.
 EARLY = 0.5
