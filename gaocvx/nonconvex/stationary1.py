@@ -6,7 +6,8 @@ close pair of zeros (:func:`.contours.sampled_roots`), locates the edges an
 obstacle puts to the amplitudes, proves that no zero is missing
 (:mod:`.completeness`), takes zeros between which F' is round-off for one
 (:func:`.roundoff.noise_clusters`), and labels each zero stable or unstable from
-probes where F' rises above its round-off (:func:`classify`, :mod:`.roundoff`).
+probes where F' rises above its round-off (:func:`classify`, :mod:`.roundoff`);
+each zero is refined and measured in its beam's own scale (:mod:`.zero_step`).
 :func:`.stationary.equilibria` calls it and polishes what it finds;
 :mod:`.stationary2` is its counterpart for two modes.
 """
@@ -25,6 +26,7 @@ from .contours import sampled_roots
 from .equilibrium import Equilibrium, same_point
 from .roundoff import (EPS, LABEL_NOISE, MERGE_NOISE, NOISE, label_threshold, noise_clusters,
                        round_off, settled, widened)
+from .zero_step import STEP_TOL, own_step
 
 __all__ = ["classify", "find_line", "ROOT_TOL", "RHO", "DERIVATIVE_TOL", "DENSE_DERIVATIVE_TOL",
            "CONTACT_DERIVATIVE_TOL"]
@@ -339,6 +341,8 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
             tie = LABEL_NOISE * EPS * max(dp.energy_size(dF(q)[2]) for q in solved)
             r = min([q for q in solved if abs(dF(q)[0] - best) <= tie],
                     key=lambda q: abs(dF(q)[1]))
+        # (refined by Newton's method, and the step measured, in the beam's own scale)
+        r, step = own_step(dp, dF, r, S) if dF(r)[2] is not None else (r, math.inf)
         F, d0, u, ok = dF(r)
         if u is None:   # (a slice that failed inside the range: no beam to report)
             log.warning("equilibria: no admissible slice at the zero s = %.17g", r)
@@ -361,15 +365,22 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
         own = dp.energy_size(u)
         size = max(own, floor) or scale
         res = abs(d0) * max(abs(r), 1e-3 * S) / size
-        if polish is not None and ok and res <= ROOT_TOL < res * size / max(own, 1e-300):
-            # a zero to the scene's accuracy but not to its own (near the flat beam):
-            # polished on the whole beam, and listed as that returns it, if it does
-            # (:mod:`.whole_beam`)
+        if polish is not None and ok and res <= ROOT_TOL and (
+                ROOT_TOL < res * size / max(own, 1e-300) or step > STEP_TOL or undecided
+                or noisy):
+            # a zero to the scene's accuracy but not to its own (near the flat beam),
+            # or one whose probes did not settle its stability: polished on the whole
+            # beam (its label from the second-order conditions), and listed as that
+            # returns it, if it does (:mod:`.whole_beam`).  (A P4 beam lifted 5.7e-9 m
+            # in a channel at gap 0, 32 elements: a probe's slice failed inside the
+            # range; once its zero was refined in its own scale, :mod:`.zero_step`,
+            # it no longer went to the polish, and stayed `inaccurate`.)
             polished = polish(u)
             if polished is not None and same_point(polished.amplitudes, [r], S):
                 out.append(polished)
                 continue
-        if res > ROOT_TOL:
+        kink = res > ROOT_TOL
+        if kink:
             # A kink of F (the obstacle takes or releases the beam: a beam lying flat
             # at gap 0 between supports has F(s) = 0.55 |s| on 16 elements, P1): F'
             # jumps through zero (upwards: F is convex but for -c s^2) and |F'| at the
@@ -395,8 +406,10 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
                     res = min(res, abs((b if fb else a)[1]) * e / size)
                     stable = True
                     break
-        status = "optimal" if ok and res <= ROOT_TOL and not (undecided or noisy) else \
-            "inaccurate"
+        # (a zero, not a kink's bracket, also in the beam's own scale: :mod:`.zero_step`)
+        own_scale = kink or step <= STEP_TOL
+        status = "optimal" if ok and res <= ROOT_TOL and own_scale and not (undecided or noisy) \
+            else "inaccurate"
         out.append(Equilibrium(float(dp.energy(u) * dp.E0), bool(stable), [float(r)], dp.x.copy(),
                                w, slope, float(res), status, float(dp.P), float(curvature),
                                float(dp.W)))

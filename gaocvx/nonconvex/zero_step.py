@@ -1,0 +1,130 @@
+"""A zero of F' (one unstable mode) refined and measured in its beam's own scale.
+
+:func:`.stationary1.find_line` brackets each zero of the reduced gradient F' by
+Brent's method to ``1e-13 S`` (S the amplitude range's scale), and its residual
+``|F'| |s|`` is measured against the scene's energy scale.  Both are the
+scene's scale, not the equilibrium's: near the convexity limit under a small
+load, a stable beam 1.3e-16 m deep had its amplitude ``s = 7.6e-9`` located to
+``5.6e-14``, passed the residual test (1.2e-9 against 1e-8) and was listed
+``optimal`` 7.4e-6 of its own size from the certified global minimiser (P2 on
+a bed at gap 0, q = -1e-6 N/m, 1e-13 above P_bar_h; a random campaign).
+
+:func:`own_step` takes Newton steps on F' from the bracketed zero, with F''
+from F' at ``s -+ h`` (``h`` a thousandth of ``|s|``: the curvature where the
+beam is), and returns the last step's size in the beam's own deflection: the
+step ``|F'| / |F''|`` times ``max |dw/ds|``, over the beam's largest ``|w|``
+(at least ``ZERO_ANSWER`` of the unsupported linear answer, the floor
+:func:`gaocvx.solve` certifies a beam flat on an obstacle against; without load
+that of the deflection the amplitude ``S`` makes).  That is
+the one-mode form of :func:`gaocvx.solve`'s stationarity (a Newton step in the
+answer's own scale): the entry is ``optimal`` only where it is at most
+:data:`STEP_TOL`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..tolerances import STATIONARITY_TOL, ZERO_ANSWER
+from .roundoff import round_off
+
+__all__ = ["own_step", "STEP_TOL"]
+
+# The Newton step in the beam's deflection, relative to its largest |w|, at most
+# (the convex ground truth's stationarity tolerance).
+STEP_TOL = STATIONARITY_TOL
+# F'' from F' at s -+ H_REL |s| (at least H_MIN S), widened tenfold while F'
+# there differs by round-off only, up to WIDEST |s| or the stability probes' PROBE S
+# (a symmetric P4 beam on a bonded bed under load, its unstable zero at s = 0).
+H_REL = 1e-3
+H_MIN = 1e-12
+WIDEST = 0.1
+PROBE = 1e-6
+# Newton steps at most; each is kept only where it lowers |F'| and moves s by at
+# most MOVE S (Brent's bracket was 1e-13 S: a longer step is F''s noise).
+STEPS = 4
+MOVE = 1e-11
+
+
+def own_step(dp, dF, r, S) -> tuple:
+    """``(s, step)``: the zero ``r`` of F' refined by Newton's method, and its step.
+
+    Parameters
+    ----------
+    dp : DiscreteProblem
+        The problem in the units of the search.
+    dF : callable
+        ``dF(s) -> (F, F', u, ok)``, memoised (:func:`.stationary1.memoised`).
+    r : float
+        A zero of F' (Brent's, or a grid point where F' = 0).
+    S : float
+        The amplitude range's scale.
+
+    Returns
+    -------
+    s : float
+        The refined zero (``r`` where no step lowered ``|F'|``).
+    step : float
+        The last Newton step's change of the deflection, relative to the beam's
+        largest ``|w|``; ``inf`` where F'' could not be told from round-off or a
+        probe's slice failed; 0 where F' is exactly 0.
+    """
+    _, d, u, ok = dF(r)
+    if u is None or not ok:
+        return r, math.inf
+    if d == 0.0:
+        return r, 0.0
+    slope = _slope(dp, dF, r, S)
+    if slope is None:
+        return r, math.inf
+    curvature, dwds = slope
+    for _ in range(STEPS):
+        t = r - d / curvature
+        if not (0.0 < abs(t - r) <= MOVE * S):
+            break
+        _, dt, ut, okt = dF(t)
+        if ut is None or not okt or not abs(dt) < abs(d):
+            break
+        r, d, u = t, dt, ut
+        if d == 0.0:
+            return r, 0.0
+    w = dp.to_physical(u)[0]
+    # (as MixedForm.has_load: a load, or a bonded bed whose surface pulls the beam)
+    has_load = bool(np.any(dp.f)) or bool(dp.bilateral and np.any(dp.g != 0))
+    # (without load no linear answer: the floor is that fraction of the deflection
+    # the range's amplitude S makes -- the flat beam of an unloaded bed 8.4e-10 m
+    # below, listed 1.2e-30 m off w = 0, is zero, not 100 % off its own size)
+    size = max(float(np.max(np.abs(w), initial=0.0)),
+               ZERO_ANSWER * (dp.W_linear if has_load else S * dwds))
+    move = abs(d / curvature) * dwds
+    return r, (move / size if size > 0.0 else math.inf)
+
+
+def _slope(dp, dF, r, S):
+    """``(F'', max |dw/ds| [m per unit s])`` at ``r`` by central differences, or None.
+
+    Where the two one-sided differences differ by more than a factor of two (a
+    kink of F': the obstacle takes or releases the beam within ``h``) the one of
+    smaller size is taken: the longer Newton step, the stricter measure.
+    """
+    _, d, u, _ = dF(r)
+    h = H_REL * max(abs(r), H_MIN * S)
+    noise = round_off(dp, u, r)
+    while h <= max(WIDEST * abs(r), PROBE * S):
+        (_, dl, ul, okl), (_, dr, ur, okr) = dF(r - h), dF(r + h)
+        if ul is None or ur is None or not (okl and okr):
+            return None
+        if abs(dr - dl) > 10.0 * noise:
+            left, right = (d - dl) / h, (dr - d) / h
+            central = (dr - dl) / (2.0 * h)
+            if left * right <= 0.0 or max(abs(left), abs(right)) > 2.0 * min(abs(left),
+                                                                             abs(right)):
+                central = min(left, right, key=abs)
+            if central == 0.0:
+                return None
+            wl, wr = dp.to_physical(ul)[0], dp.to_physical(ur)[0]
+            return central, float(np.max(np.abs(wr - wl))) / (2.0 * h)
+        h *= 10.0
+    return None
