@@ -183,10 +183,16 @@ def test_probes_count_f_prime_only_beyond_the_slices_accuracy():
 
 def _mirror_pair_and_flat(scene, eqs):
     assert len(eqs) == 3, [(e.energy, e.stable, e.amplitudes) for e in eqs]
-    assert all(e.status == "optimal" for e in eqs)
     flat = [e for e in eqs if np.max(np.abs(e.w)) == 0.0]
     pair = [e for e in eqs if np.max(np.abs(e.w)) > 0.0]
     assert len(flat) == 1 and len(pair) == 2
+    # The flat beam is exact.  The pair is `inaccurate`: F' there is round-off, its
+    # zeros known to about 1e-4 of the amplitude (the independent whole-beam Newton
+    # step moves them by 3e-7 to 5e-5 of their size, and solve's own certificate
+    # of the same beam fails likewise, stationarity 4.4e-4); until the zeros were
+    # measured in their own scale (zero_step) both were listed `optimal`.
+    assert flat[0].status == "optimal"
+    assert all(e.status == "inaccurate" for e in pair)
     assert not flat[0].stable and all(e.stable for e in pair)
     a, b = pair
     # mirror images within F''s round-off (the zeros lie anywhere in it: 4e-4 of

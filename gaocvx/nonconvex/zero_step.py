@@ -12,7 +12,8 @@ a bed at gap 0, q = -1e-6 N/m, 1e-13 above P_bar_h; a random campaign).
 :func:`own_step` takes Newton steps on F' from the bracketed zero, with F''
 from F' at ``s -+ h`` (``h`` a thousandth of ``|s|``: the curvature where the
 beam is), and returns the last step's size in the beam's own deflection: the
-step ``|F'| / |F''|`` times ``max |dw/ds|``, over the beam's largest ``|w|``
+step ``|F'| / |F''|`` (``|F'|`` at least its round-off, ``LABEL_NOISE`` eps
+own / size, :mod:`.roundoff`) times ``max |dw/ds|``, over the beam's largest ``|w|``
 (at least ``ZERO_ANSWER`` of the unsupported linear answer, the floor
 :func:`gaocvx.solve` certifies a beam flat on an obstacle against; without load
 that of the deflection the amplitude ``S`` makes).  That is
@@ -28,7 +29,7 @@ import math
 import numpy as np
 
 from ..tolerances import STATIONARITY_TOL, ZERO_ANSWER
-from .roundoff import round_off
+from .roundoff import LABEL_NOISE, NOISE, round_off
 
 __all__ = ["own_step", "STEP_TOL"]
 
@@ -98,7 +99,12 @@ def own_step(dp, dF, r, S) -> tuple:
     # below, listed 1.2e-30 m off w = 0, is zero, not 100 % off its own size)
     size = max(float(np.max(np.abs(w), initial=0.0)),
                ZERO_ANSWER * (dp.W_linear if has_load else S * dwds))
-    move = abs(d / curvature) * dwds
+    # (|F'| at least its round-off: a zero F''s scatter makes is known only that
+    # well -- without load 1e-12 above P_bar_h, 16 elements, F' was 3e-20 at a
+    # buckled beam, its round-off 2e-18, and the beam 4.7e-5 of its size from a
+    # zero of the whole beam's gradient)
+    error = max(abs(d), LABEL_NOISE / NOISE * round_off(dp, u, r))
+    move = error / abs(curvature) * dwds
     return r, (move / size if size > 0.0 else math.inf)
 
 
