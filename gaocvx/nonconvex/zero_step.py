@@ -113,24 +113,33 @@ def _slope(dp, dF, r, S):
 
     Where the two one-sided differences differ by more than a factor of two (a
     kink of F': the obstacle takes or releases the beam within ``h``) the one of
-    smaller size is taken: the longer Newton step, the stricter measure.
+    smaller size is taken: the longer Newton step, the stricter measure.  Where
+    one side's slice is inadmissible or failed (an edge of the admissible
+    amplitudes within ``h``) the other side's difference serves; None where
+    neither does.
     """
     _, d, u, _ = dF(r)
+    w = dp.to_physical(u)[0]
     h = H_REL * max(abs(r), H_MIN * S)
     noise = round_off(dp, u, r)
     while h <= max(WIDEST * abs(r), PROBE * S):
-        (_, dl, ul, okl), (_, dr, ur, okr) = dF(r - h), dF(r + h)
-        if ul is None or ur is None or not (okl and okr):
+        # (F'(r + t) - F'(r)) / t and (w(r + t) - w(r)) / t on each admissible side
+        sides = []
+        for t in (-h, h):
+            _, dt, ut, okt = dF(r + t)
+            if ut is not None and okt:
+                sides.append(((dt - d) / t, dp.to_physical(ut)[0], dt))
+        if not sides:
             return None
-        if abs(dr - dl) > 10.0 * noise:
-            left, right = (d - dl) / h, (dr - d) / h
-            central = (dr - dl) / (2.0 * h)
-            if left * right <= 0.0 or max(abs(left), abs(right)) > 2.0 * min(abs(left),
-                                                                             abs(right)):
-                central = min(left, right, key=abs)
-            if central == 0.0:
+        if max(abs(dt - d) for _, _, dt in sides) > 10.0 * noise:
+            slopes = [q for q, _, _ in sides]
+            curvature = min(slopes, key=abs)
+            if len(sides) == 2 and slopes[0] * slopes[1] > 0.0 and \
+                    max(map(abs, slopes)) <= 2.0 * min(map(abs, slopes)):
+                curvature = 0.5 * (slopes[0] + slopes[1])    # (the central difference)
+            if curvature == 0.0:
                 return None
-            wl, wr = dp.to_physical(ul)[0], dp.to_physical(ur)[0]
-            return central, float(np.max(np.abs(wr - wl))) / (2.0 * h)
+            dwds = max(float(np.max(np.abs(wt - w))) for _, wt, _ in sides) / h
+            return curvature, dwds
         h *= 10.0
     return None

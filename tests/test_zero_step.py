@@ -1,0 +1,72 @@
+"""A one-mode zero of F' refined and measured in its beam's own scale (zero_step).
+
+The stand-in problems here have one DOF, the deflection equal to the amplitude
+(``w = s`` m), so the Newton step's change of the deflection is the amplitude's,
+known in closed form from the F' each test writes down.
+"""
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from gaocvx.nonconvex.roundoff import EPS, LABEL_NOISE
+from gaocvx.nonconvex.zero_step import STEP_TOL, own_step
+
+
+def _problem(own=1.0):
+    """A loaded stand-in (W_linear 1e-20 m: a floor far below the beams here) whose
+    energy scale is ``own``."""
+    return SimpleNamespace(f=np.array([1.0]), bilateral=False, g=0.0, W_linear=1e-20,
+                           G=np.eye(1), energy_size=lambda u: own,
+                           to_physical=lambda u: (np.asarray(u, float), np.zeros(1)))
+
+
+def _reduced(fprime, admissible=lambda t: True):
+    def dF(t):
+        if not admissible(t):
+            return math.inf, math.nan, None, False
+        return 0.0, fprime(t), np.array([t]), True
+    return dF
+
+
+def test_a_zero_located_to_the_scenes_tolerance_is_refined_in_its_own():
+    """F' = 5.3 (s - s0), s0 = -7.6e-9, S = 314 (the campaign scene's numbers):
+    Brent's tolerance 1e-13 S leaves s 5.6e-14 off, 7.4e-6 of |s|; one Newton step
+    lands on s0 to round-off and the step measured is far below STEP_TOL."""
+    s0 = -7.6e-9
+    dF = _reduced(lambda t: 5.3 * (t - s0))
+    r = s0 + 5.6e-14
+    assert abs(r - s0) / abs(s0) > 7 * STEP_TOL
+    s, step = own_step(_problem(own=1e-15), dF, r, 314.0)
+    assert abs(s - s0) <= 1e-12 * abs(s0)
+    assert step <= 1e-9
+
+
+def test_an_edge_within_the_difference_step_leaves_the_other_side():
+    """F' = s - 1, no admissible beam beyond s = 1 + 1e-4 (an obstacle's edge): the
+    right-hand probe at 1 + 1e-3 is inadmissible, and F'' comes from the left one."""
+    dF = _reduced(lambda t: t - 1.0, admissible=lambda t: t <= 1.0 + 1e-4)
+    s, step = own_step(_problem(), dF, 1.0 + 1e-12, 10.0)
+    assert abs(s - 1.0) <= 1e-15 and step <= 1e-9
+
+
+def test_no_admissible_probe_is_no_certificate():
+    dF = _reduced(lambda t: t - 1.0, admissible=lambda t: abs(t - 1.0) <= 1e-6)
+    assert own_step(_problem(), dF, 1.0 + 1e-12, 10.0)[1] == math.inf
+
+
+def test_f_prime_counts_at_least_its_round_off():
+    """F' = 1e-9 (s - 1) at s = 1 + 1e-20 (F' = 1e-29, far below its round-off,
+    LABEL_NOISE eps own / |s| = 4.4e-15 with own = 1): the zero is known only to
+    4.4e-15 / 1e-9 = 4.4e-6 of |s|, more than STEP_TOL, whatever F' says."""
+    dF = _reduced(lambda t: 1e-9 * (t - 1.0) + (1e-29 if t == 1.0 else 0.0))
+    _, step = own_step(_problem(), dF, 1.0, 10.0)
+    assert step == pytest.approx(LABEL_NOISE * EPS / 1e-9, rel=1e-6)
+    assert step > STEP_TOL
+
+
+def test_an_exact_zero_is_one():
+    dF = _reduced(lambda t: 0.0)
+    assert own_step(_problem(), dF, 0.25, 1.0) == (0.25, 0.0)
