@@ -635,7 +635,12 @@ def test_one_mode_bounds_where_slices_fail_inside_the_range(caplog, monkeypatch)
         unproven = equilibria(scene)
     assert "may be missing from the list" in caplog.text
     assert all(e.complete is False for e in unproven)
-    assert [e.energy for e in unproven] == [e.energy for e in eqs]
+    # the same list, to round-off: each zero's own-scale Newton refinement
+    # (zero_step) solves slices warm-started from whatever the proof solved before
+    # (here 1e-16 of the energies apart)
+    assert len(unproven) == len(eqs)
+    assert all(abs(a.energy - b.energy) <= 1e-14 * abs(b.energy)
+               for a, b in zip(unproven, eqs))
     # (to 1e-8 of the scene's energy, 0.016 J: the multi-start's stationarity was 4.5e-8)
     assert any(e.stable and e.status == "optimal" and abs(e.energy + 1.0234188354e-4) <= 2e-10
                for e in eqs), [(e.energy, e.stable, e.status) for e in eqs]
