@@ -70,3 +70,13 @@ def test_f_prime_counts_at_least_its_round_off():
 def test_an_exact_zero_is_one():
     dF = _reduced(lambda t: 0.0)
     assert own_step(_problem(), dF, 0.25, 1.0) == (0.25, 0.0)
+
+
+def test_the_slices_accuracy_counts_as_the_probes_take_it():
+    """With ``error`` (the dense programs' F' is known to their accuracy, here
+    1e-8): F' = 1e-3 (s - 1) at s = 1 + 1e-20 is known only to 1e-8 / 1e-3 = 1e-5
+    of |s|."""
+    dF = _reduced(lambda t: 1e-3 * (t - 1.0) + (1e-29 if t == 1.0 else 0.0))
+    _, step = own_step(_problem(), dF, 1.0, 10.0, error=lambda t, u: 1e-8)
+    assert step == pytest.approx(1e-5, rel=1e-6)
+    assert own_step(_problem(), dF, 1.0, 10.0)[1] <= 1e-9

@@ -342,7 +342,8 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
             r = min([q for q in solved if abs(dF(q)[0] - best) <= tie],
                     key=lambda q: abs(dF(q)[1]))
         # (refined by Newton's method, and the step measured, in the beam's own scale)
-        r, step = own_step(dp, dF, r, S) if dF(r)[2] is not None else (r, math.inf)
+        # (F' counts at least its error, as the probes take it)
+        r, step = own_step(dp, dF, r, S, threshold) if dF(r)[2] is not None else (r, math.inf)
         F, d0, u, ok = dF(r)
         if u is None:   # (a slice that failed inside the range: no beam to report)
             log.warning("equilibria: no admissible slice at the zero s = %.17g", r)

@@ -12,8 +12,8 @@ a bed at gap 0, q = -1e-6 N/m, 1e-13 above P_bar_h; a random campaign).
 :func:`own_step` takes Newton steps on F' from the bracketed zero, with F''
 from F' at ``s -+ h`` (``h`` a thousandth of ``|s|``: the curvature where the
 beam is), and returns the last step's size in the beam's own deflection: the
-step ``|F'| / |F''|`` (``|F'|`` at least its round-off, ``LABEL_NOISE`` eps
-own / size, :mod:`.roundoff`) times ``max |dw/ds|``, over the beam's largest ``|w|``
+step ``|F'| / |F''|`` (``|F'|`` at least its error: its round-off, ``LABEL_NOISE``
+eps own / size, :mod:`.roundoff`, and the dense programs' accuracy) times ``max |dw/ds|``, over the beam's largest ``|w|``
 (at least ``ZERO_ANSWER`` of the unsupported linear answer, the floor
 :func:`gaocvx.solve` certifies a beam flat on an obstacle against; without load
 that of the deflection the amplitude ``S`` makes).  That is
@@ -49,7 +49,7 @@ STEPS = 4
 MOVE = 1e-11
 
 
-def own_step(dp, dF, r, S) -> tuple:
+def own_step(dp, dF, r, S, error=None) -> tuple:
     """``(s, step)``: the zero ``r`` of F' refined by Newton's method, and its step.
 
     Parameters
@@ -62,6 +62,11 @@ def own_step(dp, dF, r, S) -> tuple:
         A zero of F' (Brent's, or a grid point where F' = 0).
     S : float
         The amplitude range's scale.
+    error : callable, optional
+        ``error(s, u)``: F''s error at ``s`` (its slice the beam ``u``), below
+        which a nonzero F' tells nothing: :func:`.roundoff.label_threshold`'s (F''s
+        round-off, and the dense programs' accuracy); by default the round-off,
+        ``LABEL_NOISE`` eps own / size.
 
     Returns
     -------
@@ -103,8 +108,8 @@ def own_step(dp, dF, r, S) -> tuple:
     # well -- without load 1e-12 above P_bar_h, 16 elements, F' was 3e-20 at a
     # buckled beam, its round-off 2e-18, and the beam 4.7e-5 of its size from a
     # zero of the whole beam's gradient)
-    error = max(abs(d), LABEL_NOISE / NOISE * round_off(dp, u, r))
-    move = error / abs(curvature) * dwds
+    known = error(r, u) if error is not None else LABEL_NOISE / NOISE * round_off(dp, u, r)
+    move = max(abs(d), known) / abs(curvature) * dwds
     return r, (move / size if size > 0.0 else math.inf)
 
 
