@@ -1334,3 +1334,33 @@ def test_the_certified_minimiser_is_listed_once_at_its_own_amplitudes():
         s = phi.T @ (ind.G @ ind.from_nodal(e.w, e.slope))
         assert np.allclose(np.abs(e.amplitude_m), np.abs(s), rtol=0,
                            atol=1e-9 * max(np.max(np.abs(s)), 1e-12)), (e.amplitude_m, s)
+
+
+def test_the_unloaded_flat_beam_that_can_lift_off_is_unstable():
+    """A campaign (seed 5102): P1 on an obstacle at gap 0 without load, 1e-10 above
+    P_bar_h, 8 elements.  The flat beam was listed stable and `optimal`: the
+    second-order test could not decide (the curvature 8.6e-10 of the stiffness)
+    and F' at the probes was the contact slices' error.  Independently: the first
+    buckling mode (the independent K, G) is of one sign, so lifting the beam along
+    it is admissible, and the independent energy falls along it (to 1e-6 m, half
+    the buckled beam's 2e-6 m) -- w = 0 is no minimum."""
+    from gaocvx import Scene
+    from gaocvx.discrete import DiscreteProblem
+    from gaocvx.nonconvex.stationary import equilibria
+    from nonconvex_independent import Discrete
+
+    def scene_at(axial):
+        return Scene.from_dict({
+            "beam": {"model": "gao", "supports": "P1", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                     "half_thickness": 0.1, "width": 1.0},
+            "load": {"axial": axial}, "mesh": {"elements": 8}, "obstacle": {"gap": 0.0}})
+    limit = DiscreteProblem(scene_at(1.0), check_convexity=False).P_bar_h
+    scene = scene_at(limit * (1 + 1e-10))
+    ind = Discrete(scene, 1e-6)
+    phi = ind.modes(1)[1][:, 0]
+    phi = phi * 1e-6 / float(np.sum(ind.nodal_w(phi)[np.argmax(np.abs(ind.nodal_w(phi)))]))
+    assert np.all(ind.nodal_w(phi) >= 0.0)                   # lifting off: admissible
+    assert ind.energy(phi) < 0.0                             # and the energy falls
+    eqs = equilibria(scene)
+    flat = [e for e in eqs if not np.any(e.w)]
+    assert len(flat) == 1 and not flat[0].stable and flat[0].status == "optimal"

@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import SceneError, SolverError
 from .equilibrium import Equilibrium, same_point
 
-__all__ = ["at_global", "check_contact", "exact_flat", "global_minimisers", "kkt_point"]
+__all__ = ["at_global", "check_contact", "exact_flat", "global_minimisers", "kkt_point", "lifts_off"]
 
 log = logging.getLogger(__name__)
 
@@ -229,6 +229,27 @@ def _kkt_point(dp, prog, s) -> bool:
     return passes(residual)
 
 
+def lifts_off(dp, modes, rows, levels) -> bool:
+    """Whether the unloaded flat beam can lift off along an unstable mode: no minimum.
+
+    Without load the energy's gradient at ``w = 0`` is exactly zero, and along an
+    unstable mode ``phi_i`` its curvature is ``lambda_i - p < 0`` (the modes'
+    count verified).  Where ``phi_i`` (or ``-phi_i``) moves no touching row of the
+    obstacle (``rows``, level 0) into it, ``t phi_i`` is admissible for small
+    ``t > 0`` and lowers the energy: ``w = 0`` is an unstable equilibrium, whatever
+    the probes of F' say.  (P1 on an obstacle at gap 0 without load, 1e-10 above
+    P_bar_h, 8 and 15 elements: the curvature, 8.6e-10 of the stiffness, was below
+    the second-order test's EIG_TOL, F' at the probes was the contact slices'
+    error, and the flat beam was listed stable and `optimal` -- a campaign.)
+    """
+    if not modes.verified or np.any(dp.gradient(np.zeros(dp.n))):
+        return False
+    touching = np.asarray(levels, float) >= 0.0   # (rows @ 0 >= levels: gap 0)
+    phi = np.asarray(modes.phi, float)[:, :modes.k]
+    moved = rows[np.flatnonzero(touching)] @ phi
+    return bool(np.any(np.all(moved >= 0.0, axis=0) | np.all(moved <= 0.0, axis=0)))
+
+
 def exact_flat(dp, modes, out, classify, relabel: bool = False, S: float = 0.0) -> list:
     """The flat beam ``w = 0`` where, with an obstacle, it is an equilibrium itself.
 
@@ -273,8 +294,8 @@ def exact_flat(dp, modes, out, classify, relabel: bool = False, S: float = 0.0) 
     # by a small load, the flat beam is a strict minimum whose basin can be
     # narrower than the probes' 1e-8 S (P2 pressed at gap 0 by 10 N/m, two modes:
     # listed unstable and `optimal`, a review; independently stable).
-    decided = None
-    if lam is not None and len(u0) <= MAX_UNKNOWNS:
+    decided = False if lifts_off(dp, modes, rows, levels) else None
+    if decided is None and lam is not None and len(u0) <= MAX_UNKNOWNS:
         decided = second_order(dp, u0, rows, rows @ u0 - levels, np.asarray(lam, float), 0.0)
     top = max((float(np.max(np.abs(e.w))) for e in out if e is not None), default=0.0)
     near = max(floor * dp.W, 1e-9 * top)
