@@ -20,7 +20,8 @@ import numpy as np
 from ..errors import SceneError, SolverError
 from .equilibrium import Equilibrium, same_point
 
-__all__ = ["at_global", "check_contact", "exact_flat", "global_minimisers", "kkt_point", "lifts_off"]
+__all__ = ["at_global", "check_contact", "exact_flat", "global_minimisers", "kkt_point",
+           "lifts_off"]
 
 log = logging.getLogger(__name__)
 
