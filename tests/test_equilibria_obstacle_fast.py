@@ -198,13 +198,14 @@ def _flat_on_obstacle(monkeypatch):
     """P1 without load at 1.3 P_bar_h on an obstacle at gap 0 (8 elements): w = 0
     is an equilibrium, certified on the whole beam; the second-order conditions
     are switched off (as beyond 1000 unknowns), and so is the exact lift-off rule
-    (``obstacle_checks.lifts_off``: without load P1's first mode lifts the beam
+    (``obstacle_checks.lift_off_curvature``: without load P1's first mode lifts the beam
     off, and it would call w = 0 unstable whatever the probes say), so the probes
     label it: these tests give stand-in labels, to follow them through."""
     from gaocvx.nonconvex.minimum import rescale_for
     from gaocvx.nonconvex.modes import unstable_modes
     monkeypatch.setattr("gaocvx.nonconvex.whole_beam.MAX_UNKNOWNS", -1)
-    monkeypatch.setattr("gaocvx.nonconvex.obstacle_checks.lifts_off", lambda *args: False)
+    monkeypatch.setattr("gaocvx.nonconvex.obstacle_checks.lift_off_curvature",
+                        lambda *args: None)
     dp = DiscreteProblem(_scene("P1", q=0.0, gap=0.0, elements=8), check_convexity=False)
     modes = unstable_modes(dp)
     return rescale_for(dp, modes), modes
@@ -241,13 +242,23 @@ def test_an_inaccurate_entry_merged_into_the_flat_beam_is_probed_again(monkeypat
 
 @pytest.mark.parametrize("q, lifts", [(0.0, True), (-1e3, False)])
 def test_lift_off_decides_the_unloaded_flat_beam_only(q, lifts):
-    """``lifts_off``: P1 at 1.3 P_bar_h on an obstacle at gap 0 (8 elements).  Without
-    load the gradient at w = 0 is zero and the first mode, of one sign, lifts the
-    beam off: unstable, exactly.  Under a load pressing it down the gradient is not
-    zero, and the rule says nothing (the second-order conditions decide)."""
+    """``lift_off_curvature``: P1 at 1.3 P_bar_h on an obstacle at gap 0 (8 elements).
+    Without load the gradient at w = 0 is zero and the first mode, of one sign,
+    lifts the beam off: unstable, exactly, with the curvature lambda_1 - p along it
+    (the Rayleigh quotient of the independent K, G at that mode).  Under a load
+    pressing it down the gradient is not zero, and the rule says nothing (the
+    second-order conditions decide)."""
     from gaocvx.nonconvex.modes import unstable_modes
     from gaocvx.nonconvex.node import obstacle_rows
-    from gaocvx.nonconvex.obstacle_checks import lifts_off
-    dp = DiscreteProblem(_scene("P1", q=q, gap=0.0, elements=8), check_convexity=False)
+    from gaocvx.nonconvex.obstacle_checks import lift_off_curvature
+    from nonconvex_independent import Discrete
+    scene = _scene("P1", q=q, gap=0.0, elements=8)
+    dp = DiscreteProblem(scene, check_convexity=False)
     rows, levels = obstacle_rows(dp)
-    assert lifts_off(dp, unstable_modes(dp), rows, levels) is lifts
+    curvature = lift_off_curvature(dp, unstable_modes(dp), rows, levels)
+    if not lifts:
+        assert curvature is None
+        return
+    ind = Discrete(scene, 1.0)
+    lam1 = ind.modes(1)[0][0]                 # (K phi = lam G phi, G-normalised)
+    assert curvature == pytest.approx(lam1 - ind.p, rel=1e-6) and curvature < 0

@@ -21,7 +21,7 @@ from ..errors import SceneError, SolverError
 from .equilibrium import Equilibrium, same_point
 
 __all__ = ["at_global", "check_contact", "exact_flat", "global_minimisers", "kkt_point",
-           "lifts_off"]
+           "lift_off_curvature"]
 
 log = logging.getLogger(__name__)
 
@@ -230,25 +230,31 @@ def _kkt_point(dp, prog, s) -> bool:
     return passes(residual)
 
 
-def lifts_off(dp, modes, rows, levels) -> bool:
-    """Whether the unloaded flat beam can lift off along an unstable mode: no minimum.
+def lift_off_curvature(dp, modes, rows, levels):
+    """The unloaded flat beam's curvature along an unstable mode it can lift off along, or None.
 
     Without load the energy's gradient at ``w = 0`` is exactly zero, and along an
     unstable mode ``phi_i`` its curvature is ``lambda_i - p < 0`` (the modes'
     count verified).  Where ``phi_i`` (or ``-phi_i``) moves no touching row of the
     obstacle (``rows``, level 0) into it, ``t phi_i`` is admissible for small
     ``t > 0`` and lowers the energy: ``w = 0`` is an unstable equilibrium, whatever
-    the probes of F' say.  (P1 on an obstacle at gap 0 without load, 1e-10 above
-    P_bar_h, 8 and 15 elements: the curvature, 8.6e-10 of the stiffness, was below
-    the second-order test's EIG_TOL, F' at the probes was the contact slices'
-    error, and the flat beam was listed stable and `optimal` -- a campaign.)
+    the probes of F' say.  Returns the least such ``lambda_i - p`` (program
+    units, as :attr:`.equilibrium.Equilibrium.curvature`), None where no unstable
+    mode lifts the beam off or a load acts.  (P1 on an obstacle at gap 0 without
+    load, 1e-10 above P_bar_h, 8 and 15 elements: the curvature, 8.6e-10 of the
+    stiffness, was below the second-order test's EIG_TOL, F' at the probes was the
+    contact slices' error, and the flat beam was listed stable and `optimal` -- a
+    campaign.)
     """
     if not modes.verified or np.any(dp.gradient(np.zeros(dp.n))):
-        return False
+        return None
     touching = np.asarray(levels, float) >= 0.0   # (rows @ 0 >= levels: gap 0)
     phi = np.asarray(modes.phi, float)[:, :modes.k]
     moved = rows[np.flatnonzero(touching)] @ phi
-    return bool(np.any(np.all(moved >= 0.0, axis=0) | np.all(moved <= 0.0, axis=0)))
+    lifting = np.all(moved >= 0.0, axis=0) | np.all(moved <= 0.0, axis=0)
+    if not np.any(lifting):
+        return None
+    return float(np.min(np.asarray(modes.lam, float)[:modes.k][lifting] - float(modes.p)))
 
 
 def exact_flat(dp, modes, out, classify, relabel: bool = False, S: float = 0.0) -> list:
@@ -295,7 +301,10 @@ def exact_flat(dp, modes, out, classify, relabel: bool = False, S: float = 0.0) 
     # by a small load, the flat beam is a strict minimum whose basin can be
     # narrower than the probes' 1e-8 S (P2 pressed at gap 0 by 10 N/m, two modes:
     # listed unstable and `optimal`, a review; independently stable).
-    decided = False if lifts_off(dp, modes, rows, levels) else None
+    lift = lift_off_curvature(dp, modes, rows, levels)
+    decided = False if lift is not None else None
+    # (the curvature along the mode it lifts off along, else unknown: NaN)
+    exact = lift if lift is not None else math.nan
     if decided is None and lam is not None and len(u0) <= MAX_UNKNOWNS:
         decided = second_order(dp, u0, rows, rows @ u0 - levels, np.asarray(lam, float), 0.0)
     top = max((float(np.max(np.abs(e.w))) for e in out if e is not None), default=0.0)
@@ -319,14 +328,14 @@ def exact_flat(dp, modes, out, classify, relabel: bool = False, S: float = 0.0) 
         keep.amplitudes, keep.residual, keep.status = [0.0] * modes.k, 0.0, "optimal"
         keep.whole_beam = False
         if decided is not None:
-            keep.stable, keep.curvature = bool(decided), math.nan
+            keep.stable, keep.curvature = bool(decided), exact
         elif relabel or guessed or len({e.stable for e in flat}) > 1:
             stable, curvature, *known = classify(np.zeros(modes.k))
             keep.stable, keep.curvature = bool(stable), float(curvature)
             if not all(known):   # (the probes' F' round-off: the label is not known)
                 keep.status = "inaccurate"
         return [e for e in out if e is keep or all(e is not f for f in flat)]
-    stable, curvature, *known = (decided, math.nan) if decided is not None else \
+    stable, curvature, *known = (decided, exact) if decided is not None else \
         classify(np.zeros(modes.k))
     log.info("equilibria: the flat beam w = 0, an equilibrium, added (%s)",
              "stable" if stable else "unstable")
