@@ -262,3 +262,21 @@ def test_lift_off_decides_the_unloaded_flat_beam_only(q, lifts):
     ind = Discrete(scene, 1.0)
     lam1 = ind.modes(1)[0][0]                 # (K phi = lam G phi, G-normalised)
     assert curvature == pytest.approx(lam1 - ind.p, rel=1e-6) and curvature < 0
+
+
+def test_lift_off_needs_a_curvature_certainly_negative():
+    """The modes' count takes lambda_i up to p (1 + MARGIN): a mode that lifts the
+    beam off with lambda_i = p (at P_bar_h itself the flat beam is the minimum) or
+    within the modes' margin of it decides nothing."""
+    import dataclasses
+    from gaocvx.nonconvex.modes import unstable_modes
+    from gaocvx.nonconvex.node import obstacle_rows
+    from gaocvx.nonconvex.obstacle_checks import lift_off_curvature
+    dp = DiscreteProblem(_scene("P1", q=0.0, gap=0.0, elements=8), check_convexity=False)
+    rows, levels = obstacle_rows(dp)
+    modes = unstable_modes(dp)
+    assert lift_off_curvature(dp, modes, rows, levels) < 0
+    at_limit = dataclasses.replace(modes, lam=np.full_like(modes.lam, modes.p))
+    assert lift_off_curvature(dp, at_limit, rows, levels) is None
+    margin = float(modes.p - modes.lam[0]) / 2
+    assert lift_off_curvature(dp, dataclasses.replace(modes, delta=margin), rows, levels) is None

@@ -230,6 +230,10 @@ def _kkt_point(dp, prog, s) -> bool:
     return passes(residual)
 
 
+# lambda_i - p counts as negative below -CERTAIN p (and twice the modes' margin).
+CERTAIN = 1e-13
+
+
 def lift_off_curvature(dp, modes, rows, levels):
     """The unloaded flat beam's curvature along an unstable mode it can lift off along, or None.
 
@@ -240,7 +244,8 @@ def lift_off_curvature(dp, modes, rows, levels):
     ``t > 0`` and lowers the energy: ``w = 0`` is an unstable equilibrium, whatever
     the probes of F' say.  Returns the least such ``lambda_i - p`` (program
     units, as :attr:`.equilibrium.Equilibrium.curvature`), None where no unstable
-    mode lifts the beam off or a load acts.  (P1 on an obstacle at gap 0 without
+    mode lifts the beam off, none has ``lambda_i - p`` certainly negative (below
+    ``-CERTAIN p`` and twice the modes' margin ``delta``), or a load acts.  (P1 on an obstacle at gap 0 without
     load, 1e-10 above P_bar_h, 8 and 15 elements: the curvature, 8.6e-10 of the
     stiffness, was below the second-order test's EIG_TOL, F' at the probes was the
     contact slices' error, and the flat beam was listed stable and `optimal` -- a
@@ -252,9 +257,11 @@ def lift_off_curvature(dp, modes, rows, levels):
     phi = np.asarray(modes.phi, float)[:, :modes.k]
     moved = rows[np.flatnonzero(touching)] @ phi
     lifting = np.all(moved >= 0.0, axis=0) | np.all(moved <= 0.0, axis=0)
-    if not np.any(lifting):
-        return None
-    return float(np.min(np.asarray(modes.lam, float)[:modes.k][lifting] - float(modes.p)))
+    # (a curvature certainly negative only: the modes' count takes lambda_i up to
+    # p (1 + MARGIN), and at P_bar_h itself the flat beam is the minimum)
+    curvature = np.asarray(modes.lam, float)[:modes.k] - float(modes.p)
+    lifting &= curvature < -max(2.0 * float(modes.delta), CERTAIN * float(modes.p))
+    return float(np.min(curvature[lifting])) if np.any(lifting) else None
 
 
 def exact_flat(dp, modes, out, classify, relabel: bool = False, S: float = 0.0) -> list:
