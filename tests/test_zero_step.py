@@ -13,13 +13,17 @@ import pytest
 
 from gaocvx.nonconvex.roundoff import EPS, LABEL_NOISE
 from gaocvx.nonconvex.zero_step import STEP_TOL, own_step
+from gaocvx.tolerances import ZERO_ANSWER
+
+
+# A loaded stand-in's floor under |w| [m] (own_step's zero_floor): far below the
+# beams here.
+FLOOR = 1e-26
 
 
 def _problem(own=1.0):
-    """A loaded stand-in (W_linear 1e-20 m: a floor far below the beams here) whose
-    energy scale is ``own``."""
-    return SimpleNamespace(f=np.array([1.0]), bilateral=False, g=0.0, W_linear=1e-20,
-                           G=np.eye(1), energy_size=lambda u: own,
+    """A stand-in whose energy scale is ``own``."""
+    return SimpleNamespace(G=np.eye(1), energy_size=lambda u: own,
                            to_physical=lambda u: (np.asarray(u, float), np.zeros(1)))
 
 
@@ -39,7 +43,7 @@ def test_a_zero_located_to_the_scenes_tolerance_is_refined_in_its_own():
     dF = _reduced(lambda t: 5.3 * (t - s0))
     r = s0 + 5.6e-14
     assert abs(r - s0) / abs(s0) > 7 * STEP_TOL
-    s, step = own_step(_problem(own=1e-15), dF, r, 314.0)
+    s, step = own_step(_problem(own=1e-15), dF, r, 314.0, zero_floor=FLOOR)
     assert abs(s - s0) <= 1e-12 * abs(s0)
     assert step <= 1e-9
 
@@ -48,13 +52,13 @@ def test_an_edge_within_the_difference_step_leaves_the_other_side():
     """F' = s - 1, no admissible beam beyond s = 1 + 1e-4 (an obstacle's edge): the
     right-hand probe at 1 + 1e-3 is inadmissible, and F'' comes from the left one."""
     dF = _reduced(lambda t: t - 1.0, admissible=lambda t: t <= 1.0 + 1e-4)
-    s, step = own_step(_problem(), dF, 1.0 + 1e-12, 10.0)
+    s, step = own_step(_problem(), dF, 1.0 + 1e-12, 10.0, zero_floor=FLOOR)
     assert abs(s - 1.0) <= 1e-15 and step <= 1e-9
 
 
 def test_no_admissible_probe_is_no_certificate():
     dF = _reduced(lambda t: t - 1.0, admissible=lambda t: abs(t - 1.0) <= 1e-6)
-    assert own_step(_problem(), dF, 1.0 + 1e-12, 10.0)[1] == math.inf
+    assert own_step(_problem(), dF, 1.0 + 1e-12, 10.0, zero_floor=FLOOR)[1] == math.inf
 
 
 def test_f_prime_counts_at_least_its_round_off():
@@ -62,14 +66,14 @@ def test_f_prime_counts_at_least_its_round_off():
     LABEL_NOISE eps own / |s| = 4.4e-15 with own = 1): the zero is known only to
     4.4e-15 / 1e-9 = 4.4e-6 of |s|, more than STEP_TOL, whatever F' says."""
     dF = _reduced(lambda t: 1e-9 * (t - 1.0) + (1e-29 if t == 1.0 else 0.0))
-    _, step = own_step(_problem(), dF, 1.0, 10.0)
+    _, step = own_step(_problem(), dF, 1.0, 10.0, zero_floor=FLOOR)
     assert step == pytest.approx(LABEL_NOISE * EPS / 1e-9, rel=1e-6)
     assert step > STEP_TOL
 
 
 def test_an_exact_zero_is_one():
     dF = _reduced(lambda t: 0.0)
-    assert own_step(_problem(), dF, 0.25, 1.0) == (0.25, 0.0)
+    assert own_step(_problem(), dF, 0.25, 1.0, zero_floor=FLOOR) == (0.25, 0.0)
 
 
 def test_the_slices_accuracy_counts_as_the_probes_take_it():
@@ -77,6 +81,24 @@ def test_the_slices_accuracy_counts_as_the_probes_take_it():
     1e-8): F' = 1e-3 (s - 1) at s = 1 + 1e-20 is known only to 1e-8 / 1e-3 = 1e-5
     of |s|."""
     dF = _reduced(lambda t: 1e-3 * (t - 1.0) + (1e-29 if t == 1.0 else 0.0))
-    _, step = own_step(_problem(), dF, 1.0, 10.0, error=lambda t, u: 1e-8)
+    _, step = own_step(_problem(), dF, 1.0, 10.0, zero_floor=FLOOR, error=lambda t, u: 1e-8)
     assert step == pytest.approx(1e-5, rel=1e-6)
-    assert own_step(_problem(), dF, 1.0, 10.0)[1] <= 1e-9
+    assert own_step(_problem(), dF, 1.0, 10.0, zero_floor=FLOOR)[1] <= 1e-9
+
+
+def test_the_step_is_measured_against_the_larger_of_the_beam_and_its_floor():
+    """F' = 5.3 (s - s0) (1e-29 at s0), s0 = -7.6e-9 m, known only to 1e-8
+    (``error``): the step is 1e-8 / 5.3 m, over |w| = 7.6e-9 m under a loaded floor
+    below it, over the floor above it, and without load (no floor given) over
+    ``ZERO_ANSWER`` of the deflection the range S = 314 makes (dw/ds = 1)."""
+    s0 = -7.6e-9
+    dF = _reduced(lambda t: 5.3 * (t - s0) + (1e-29 if t == s0 else 0.0))
+    move = 1e-8 / 5.3
+
+    def step(floor):
+        return own_step(_problem(own=1e-15), dF, s0, 314.0, error=lambda t, u: 1e-8,
+                        zero_floor=floor)[1]
+
+    assert step(FLOOR) == pytest.approx(move / abs(s0), rel=1e-6)
+    assert step(1e-3) == pytest.approx(move / 1e-3, rel=1e-6)
+    assert step(None) == pytest.approx(move / (ZERO_ANSWER * 314.0), rel=1e-6)

@@ -1,4 +1,7 @@
-"""The stability of a zero of the reduced function with two modes, from probes of F.
+"""The stability of a zero of the reduced function, from probes of F and F'.
+
+:func:`classify` labels a zero ``r`` of one mode's F' (:mod:`.stationary1`) from
+F' at ``r -+ h``.
 
 :func:`curvature` classifies a zero ``s`` of ``∇F`` (:mod:`.stationary2`): the
 least eigenvalue of F's Hessian (central differences) and the least one-sided
@@ -20,7 +23,34 @@ import numpy as np
 
 from .roundoff import LABEL_NOISE, NOISE, round_off
 
-__all__ = ["curvature", "least_rise", "probe_noise", "hessian_stability"]
+__all__ = ["classify", "curvature", "least_rise", "probe_noise", "hessian_stability"]
+
+
+def classify(dF, r, h) -> tuple:
+    """``(stable, curvature)`` of a zero ``r`` of F' from F' at ``r -+ h``.
+
+    A minimum of F has F' < 0 to its left and > 0 to its right; a side
+    outside the admissible amplitudes (an obstacle's edge: ``F = inf`` there)
+    counts as rising, for F cannot be lowered that way.  (Taking the probe's
+    F' = 0 outside the range for a slope labelled a flat beam held by a gap-0
+    obstacle, the certified global minimiser, unstable: a trial's P4 beam under
+    a load table with unloaded ends at 1.02 P_bar_h.)
+    """
+    mid = dF(r)[1]
+    left, right = (dF(r + t) for t in (-h, h))
+    fl, fr = math.isfinite(left[0]), math.isfinite(right[0])
+    if fl and fr:
+        # (the lesser one-sided curvature: at a kink of F's curvature -- a flat
+        # beam lifting off a bed at gap 0 -- the central difference averages a
+        # falling side with a rising one, and the label is the sides')
+        curvature = min(right[1] - mid, mid - left[1]) / h
+        if right[1] != left[1]:
+            return bool(left[1] < 0 < right[1]), curvature
+        return bool(curvature > 0), curvature
+    if not (fl or fr):
+        return False, math.nan
+    curvature = (right[1] - mid) / h if fr else (mid - left[1]) / h
+    return bool(right[1] > 0 if fr else left[1] < 0), curvature
 
 
 def curvature(grad, H, s, h) -> float:
@@ -92,7 +122,7 @@ def least_rise(grad, s, h, n: int = 16, fine: int = 64, kink: bool = False) -> f
     K - 2c > 0 called it stable where lifting off lowers the energy (a
     campaign's P4 beam on a bed of 3e12 N/m^2 at 5e9 N, 8 elements; a path
     called w = 0 unstable at 4e9 N and stable at 5e9 N).  With one mode the
-    two sides are compared already (:func:`.stationary1.classify`).  Under a
+    two sides are compared already (:func:`.probes.classify`).  Under a
     load that presses a beam flat at gap 0, F rises in most directions (the
     load's work) and falls only in a narrow cone where the beam lifts off its
     unloaded span: 10 degrees wide for a P2 beam under two point forces, between

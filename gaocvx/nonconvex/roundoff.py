@@ -73,7 +73,7 @@ def label_threshold(noise, dtol, c, S):
 
 def settled(dF, noise, t) -> bool:
     """Whether ``|F'(t)|`` rises above ``noise(t, u)`` (:func:`round_off`), or
-    ``t`` is inadmissible (``F = inf``: :func:`.stationary1.classify` takes
+    ``t`` is inadmissible (``F = inf``: :func:`.probes.classify` takes
     that side as it is)."""
     F, d, u = dF(t)[:3]
     if not math.isfinite(F) or u is None:

@@ -56,10 +56,11 @@ from . import stationary1 as line
 from .equilibrium import Equilibrium, check_has_minimum, check_mountain_pass, same_point
 from .images import complete_beams
 from .at_limit import flat_at_limit
-from .probes import hessian_stability
+from .probes import classify as classify_zero, hessian_stability
 from .roundoff import label_threshold, round_off, settled, widened
 from .obstacle_checks import check_contact, exact_flat, global_minimisers
 from .whole_beam import polisher, settle
+from .zero_step import zero_floor
 from .zooms import own_scale
 
 __all__ = ["Equilibrium", "equilibria", "GRID", "MAX_GRID"]
@@ -79,7 +80,7 @@ def flat_classifier(dp, dF, S, out, probe_tol=0.0, c=0.0):
     on an obstacle (:func:`.obstacle_checks.exact_flat`), from F' one mode along
     (``dF``, the memoised reduced function of :func:`.stationary1.memoised`).
 
-    Probes 1e-6 ``S`` either side (:func:`.stationary1.classify`; a quarter of
+    Probes 1e-6 ``S`` either side (:func:`.probes.classify`; a quarter of
     the way to the nearest other listed equilibrium of ``out`` where that is
     closer), widened fourfold while F' at them is within its round-off or the
     slices' accuracy ``probe_tol`` (:func:`.roundoff.label_threshold`, with the
@@ -108,7 +109,7 @@ def flat_classifier(dp, dF, S, out, probe_tol=0.0, c=0.0):
             log.warning("equilibria: F' next to the flat beam is within its round-off or the "
                         "slices' accuracy as far as the probes reach (%.3g); its stability "
                         "is not known", h)
-        stable, curvature = line.classify(dF, 0.0, h)
+        stable, curvature = classify_zero(dF, 0.0, h)
         return stable, curvature, not noisy
     return classify
 
@@ -297,7 +298,8 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         reduced = line.memoised(prog)
         out, complete = line.find_line(
             dp, prog, S, points, grid, float(lo[0]), float(hi[0]), scene_energy(dp, modes),
-            float(modes.c[0]), polish, dtol=dtol, probe_tol=probe_tol, dF=reduced)
+            float(modes.c[0]), polish, dtol=dtol, probe_tol=probe_tol, dF=reduced,
+            zero_floor=zero_floor(dp))
     if complete is not None:
         # (the proof rests on F + c s^2 being convex: c from the verified modes)
         complete = complete and bool(modes.verified)

@@ -6,7 +6,7 @@ close pair of zeros (:func:`.contours.sampled_roots`), locates the edges an
 obstacle puts to the amplitudes, proves that no zero is missing
 (:mod:`.completeness`), takes zeros between which F' is round-off for one
 (:func:`.roundoff.noise_clusters`), and labels each zero stable or unstable from
-probes where F' rises above its round-off (:func:`classify`, :mod:`.roundoff`);
+probes where F' rises above its round-off (:func:`.probes.classify`, :mod:`.roundoff`);
 each zero is refined and measured in its beam's own scale (:mod:`.zero_step`).
 :func:`.stationary.equilibria` calls it and polishes what it finds;
 :mod:`.stationary2` is its counterpart for two modes.
@@ -24,11 +24,12 @@ from ..errors import SceneError
 from .completeness import proven_roots
 from .contours import sampled_roots
 from .equilibrium import Equilibrium, same_point
+from .probes import classify
 from .roundoff import (EPS, LABEL_NOISE, MERGE_NOISE, NOISE, label_threshold, noise_clusters,
                        round_off, settled, widened)
 from .zero_step import STEP_TOL, own_step
 
-__all__ = ["classify", "find_line", "ROOT_TOL", "RHO", "DERIVATIVE_TOL", "DENSE_DERIVATIVE_TOL",
+__all__ = ["find_line", "ROOT_TOL", "RHO", "DERIVATIVE_TOL", "DENSE_DERIVATIVE_TOL",
            "CONTACT_DERIVATIVE_TOL"]
 
 log = logging.getLogger(__name__)
@@ -50,33 +51,6 @@ DENSE_DERIVATIVE_TOL = 1e-7
 CONTACT_DERIVATIVE_TOL = 1e-8
 
 
-def classify(dF, r, h) -> tuple:
-    """``(stable, curvature)`` of a zero ``r`` of F' from F' at ``r -+ h``.
-
-    A minimum of F has F' < 0 to its left and > 0 to its right; a side
-    outside the admissible amplitudes (an obstacle's edge: ``F = inf`` there)
-    counts as rising, for F cannot be lowered that way.  (Taking the probe's
-    F' = 0 outside the range for a slope labelled a flat beam held by a gap-0
-    obstacle, the certified global minimiser, unstable: a trial's P4 beam under
-    a load table with unloaded ends at 1.02 P_bar_h.)
-    """
-    mid = dF(r)[1]
-    left, right = (dF(r + t) for t in (-h, h))
-    fl, fr = math.isfinite(left[0]), math.isfinite(right[0])
-    if fl and fr:
-        # (the lesser one-sided curvature: at a kink of F's curvature -- a flat
-        # beam lifting off a bed at gap 0 -- the central difference averages a
-        # falling side with a rising one, and the label is the sides')
-        curvature = min(right[1] - mid, mid - left[1]) / h
-        if right[1] != left[1]:
-            return bool(left[1] < 0 < right[1]), curvature
-        return bool(curvature > 0), curvature
-    if not (fl or fr):
-        return False, math.nan
-    curvature = (right[1] - mid) / h if fr else (mid - left[1]) / h
-    return bool(right[1] > 0 if fr else left[1] < 0), curvature
-
-
 def memoised(prog):
     """``dF(s) -> (F, F', u, ok)`` at a scalar amplitude ``s``, ``prog.reduced([s])``
     solved once per ``s``; the solves are kept in ``dF.cache`` (the grid, the
@@ -96,7 +70,7 @@ def memoised(prog):
 
 
 def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
-              dtol=DERIVATIVE_TOL, probe_tol=0.0, dF=None) -> tuple:
+              dtol=DERIVATIVE_TOL, probe_tol=0.0, dF=None, zero_floor=None) -> tuple:
     """The equilibria with amplitudes in ``[lo, hi]`` and the proof that none is missed.
 
     Parameters
@@ -129,6 +103,10 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
     dF : callable, optional
         ``prog``'s reduced function memoised (:func:`memoised`), to share its
         solves with the caller; a new one by default.
+    zero_floor : float, optional
+        Under load, the deflection [m] below which a beam counts as zero, the
+        floor of each zero's own-scale Newton step (:func:`.zero_step.own_step`);
+        None without load.
 
     Returns
     -------
@@ -343,7 +321,7 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
                     key=lambda q: abs(dF(q)[1]))
         # (refined by Newton's method, and the step measured, in the beam's own scale)
         # (F' counts at least its error, as the probes take it)
-        r, step = own_step(dp, dF, r, S, threshold) if dF(r)[2] is not None else (r, math.inf)
+        r, step = own_step(dp, dF, r, S, threshold, zero_floor)
         F, d0, u, ok = dF(r)
         if u is None:   # (a slice that failed inside the range: no beam to report)
             log.warning("equilibria: no admissible slice at the zero s = %.17g", r)

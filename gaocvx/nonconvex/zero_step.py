@@ -28,10 +28,11 @@ import math
 
 import numpy as np
 
+from ..mixed import MixedForm
 from ..tolerances import STATIONARITY_TOL, ZERO_ANSWER
 from .roundoff import LABEL_NOISE, NOISE, round_off
 
-__all__ = ["own_step", "STEP_TOL"]
+__all__ = ["own_step", "zero_floor", "STEP_TOL"]
 
 # The Newton step in the beam's deflection, relative to its largest |w|, at most
 # (the convex ground truth's stationarity tolerance).
@@ -49,7 +50,7 @@ STEPS = 4
 MOVE = 1e-11
 
 
-def own_step(dp, dF, r, S, error=None) -> tuple:
+def own_step(dp, dF, r, S, error=None, zero_floor=None) -> tuple:
     """``(s, step)``: the zero ``r`` of F' refined by Newton's method, and its step.
 
     Parameters
@@ -67,6 +68,11 @@ def own_step(dp, dF, r, S, error=None) -> tuple:
         which a nonzero F' tells nothing: :func:`.roundoff.label_threshold`'s (F''s
         round-off, and the dense programs' accuracy); by default the round-off,
         ``LABEL_NOISE`` eps own / size.
+    zero_floor : float, optional
+        Under load, the deflection [m] below which a beam counts as zero
+        (:attr:`gaocvx.mixed.MixedForm.zero_floor` times ``W``: ``ZERO_ANSWER``
+        of the unsupported linear answer).  None without load: ``ZERO_ANSWER``
+        of the deflection the amplitude ``S`` makes.
 
     Returns
     -------
@@ -84,11 +90,10 @@ def own_step(dp, dF, r, S, error=None) -> tuple:
 
     >>> import numpy as np
     >>> from types import SimpleNamespace
-    >>> dp = SimpleNamespace(f=np.ones(1), bilateral=False, g=0.0, W_linear=1e-20,
-    ...                      G=np.eye(1), energy_size=lambda u: 1e-15,
+    >>> dp = SimpleNamespace(G=np.eye(1), energy_size=lambda u: 1e-15,
     ...                      to_physical=lambda u: (u, 0 * u))
     >>> dF = lambda t: (0.0, 5.3 * (t + 7.6e-9), np.array([t]), True)
-    >>> s, step = own_step(dp, dF, -7.6e-9 + 5.6e-14, 314.0)
+    >>> s, step = own_step(dp, dF, -7.6e-9 + 5.6e-14, 314.0, zero_floor=1e-26)
     >>> bool(abs(s + 7.6e-9) < 1e-20), bool(step < 1e-9)
     (True, True)
     """
@@ -112,13 +117,12 @@ def own_step(dp, dF, r, S, error=None) -> tuple:
         if d == 0.0:
             return r, 0.0
     w = dp.to_physical(u)[0]
-    # (as MixedForm.has_load: a load, or a bonded bed whose surface pulls the beam)
-    has_load = bool(np.any(dp.f)) or bool(dp.bilateral and np.any(dp.g != 0))
     # (without load no linear answer: the floor is that fraction of the deflection
     # the range's amplitude S makes -- the flat beam of an unloaded bed 8.4e-10 m
     # below, listed 1.2e-30 m off w = 0, is zero, not 100 % off its own size)
-    size = max(float(np.max(np.abs(w), initial=0.0)),
-               ZERO_ANSWER * (dp.W_linear if has_load else S * dwds))
+    if zero_floor is None:
+        zero_floor = ZERO_ANSWER * S * dwds
+    size = max(float(np.max(np.abs(w), initial=0.0)), zero_floor)
     # (|F'| at least its round-off: a zero F''s scatter makes is known only that
     # well -- without load 1e-12 above P_bar_h, 16 elements, F' was 3e-20 at a
     # buckled beam, its round-off 2e-18, and the beam 4.7e-5 of its size from a
@@ -126,6 +130,18 @@ def own_step(dp, dF, r, S, error=None) -> tuple:
     known = error(r, u) if error is not None else LABEL_NOISE / NOISE * round_off(dp, u, r)
     move = max(abs(d), known) / abs(curvature) * dwds
     return r, (move / size if size > 0.0 else math.inf)
+
+
+def zero_floor(dp):
+    """The deflection [m] below which ``dp``'s beam counts as zero, or None without load.
+
+    :attr:`gaocvx.mixed.MixedForm.zero_floor` in metres: ``ZERO_ANSWER`` of the
+    unsupported linear answer, the floor :func:`gaocvx.solve` certifies a beam
+    flat on an obstacle against.  Without load there is no linear answer
+    (:func:`own_step` then takes the floor from the amplitude range).
+    """
+    mf = MixedForm(dp)
+    return float(mf.zero_floor * dp.W) if mf.has_load else None
 
 
 def _slope(dp, dF, r, S):
