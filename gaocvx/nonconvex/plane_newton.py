@@ -28,6 +28,7 @@ import numpy as np
 from .equilibrium import Equilibrium, same_point
 from .probes import curvature as _curvature, probe_noise
 from .stationary1 import ROOT_TOL
+from .zero_step import STEP_TOL, plane_step
 
 __all__ = ["newton", "at_roots", "grid_seeds", "axis"]
 
@@ -63,7 +64,7 @@ def newton(grad, hessian, seeds, S) -> list:
 
 
 def at_roots(dp, grad, hessian, roots, S, known=(), strict=False, floor=0.0,
-              polish=None) -> list:
+             polish=None, zero_floor=None) -> list:
     """The equilibria at Newton's end points that are zeros of ``∇F``
     (:mod:`.stationary2`, step 3), merged when closer than 1e-6 S (to each other or to ``known`` amplitudes);
     ``strict``: only those within the residual's tolerance.
@@ -76,6 +77,10 @@ def at_roots(dp, grad, hessian, roots, S, known=(), strict=False, floor=0.0,
     (End points where Newton did not converge, at a kink of F, are left to the
     edge minima: they once also kept the edge minima from reporting a beam
     resting on the obstacle there.)
+
+    A zero is ``optimal`` only where, refined by Newton's method in its own
+    scale, its last step moves the beam by at most ``STEP_TOL`` of its size
+    (:func:`.zero_step.plane_step`; ``zero_floor`` the floor under its size).
     """
     out, have = [], [np.asarray(k, float) for k in known]
     for r in roots:
@@ -99,6 +104,13 @@ def at_roots(dp, grad, hessian, roots, S, known=(), strict=False, floor=0.0,
                 continue
         if res > (ROOT_TOL if strict else 1e3 * ROOT_TOL):  # Newton did not converge
             continue
+        step = math.inf
+        if ok and res <= ROOT_TOL:
+            # (refined and measured in the beam's own scale)
+            r, step = plane_step(dp, grad, hessian, r, S, zero_floor)
+            F, d, u, ok = grad(r)
+            size = dp.energy_size(u) or 1.0
+            res = float(np.linalg.norm(d)) * max(float(np.linalg.norm(r)), 1e-3 * S) / size
         H = hessian(r)
         if H is None:
             continue
@@ -106,7 +118,8 @@ def at_roots(dp, grad, hessian, roots, S, known=(), strict=False, floor=0.0,
         w, slope = dp.to_physical(u)
         others = [q for q in list(known) + list(roots) if not same_point(q, r, S)]
         curvature, noisy = _label(dp, grad, hessian, r, H, S, others)
-        status = "optimal" if ok and res <= ROOT_TOL and not noisy else "inaccurate"
+        status = ("optimal" if ok and res <= ROOT_TOL and step <= STEP_TOL and not noisy
+                  else "inaccurate")
         out.append(Equilibrium(float(dp.energy(u) * dp.E0), curvature > 0,
                                [float(x) for x in r], dp.x.copy(), w, slope, res, status,
                                float(dp.P), curvature, float(dp.W)))

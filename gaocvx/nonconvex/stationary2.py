@@ -108,6 +108,7 @@ from .polygon import program_polygon
 from .probes import least_rise as _least_rise, probe_noise
 from .stationary1 import RHO
 from .whole_beam import polisher, settle as settle_beams
+from .zero_step import zero_floor
 
 __all__ = ["find_plane", "GRID2"]
 
@@ -176,9 +177,11 @@ def find_plane(dp, prog, S, grid: int = GRID2, floor: float = 0.0, modes=None,
 
     # (zeros resolved to the scene's accuracy but not to their own: the whole beam)
     polish = polisher(dp, modes)
+    own_floor = zero_floor(dp)   # (the floor under a zero's size in its own scale)
 
     def at_roots(roots, *args, **kwargs):
-        return _at_roots(dp, grad, hessian, roots, *args, floor=floor, polish=polish, **kwargs)
+        return _at_roots(dp, grad, hessian, roots, *args, floor=floor, polish=polish,
+                         zero_floor=own_floor, **kwargs)
 
     if box is None:
         box = (getattr(prog, "smin", [-S, -S]), getattr(prog, "smax", [S, S]))

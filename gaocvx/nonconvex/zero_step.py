@@ -30,9 +30,10 @@ import numpy as np
 
 from ..mixed import MixedForm
 from ..tolerances import STATIONARITY_TOL, ZERO_ANSWER
+from .equilibrium import MERGE
 from .roundoff import LABEL_NOISE, NOISE, round_off
 
-__all__ = ["own_step", "zero_floor", "STEP_TOL"]
+__all__ = ["own_step", "plane_step", "zero_floor", "STEP_TOL"]
 
 # The Newton step in the beam's deflection, relative to its largest |w|, at most
 # (the convex ground truth's stationarity tolerance).
@@ -48,6 +49,11 @@ PROBE = 1e-6
 # most MOVE S (Brent's bracket was 1e-13 S: a longer step is F''s noise).
 STEPS = 4
 MOVE = 1e-11
+# Two modes: Newton steps at most (the Hessian again at each), within the
+# searches' merging distance MERGE S or PLANE_REACH of the zero's |s| of where
+# it was found (the plane's Newton method stopped on steps of 1e-13 S).
+PLANE_STEPS = 12
+PLANE_REACH = 0.5
 
 
 def own_step(dp, dF, r, S, error=None, zero_floor=None) -> tuple:
@@ -130,6 +136,124 @@ def own_step(dp, dF, r, S, error=None, zero_floor=None) -> tuple:
     known = error(r, u) if error is not None else LABEL_NOISE / NOISE * round_off(dp, u, r)
     move = max(abs(d), known) / abs(curvature) * dwds
     return r, (move / size if size > 0.0 else math.inf)
+
+
+def plane_step(dp, grad, hessian, r, S, zero_floor=None) -> tuple:
+    """``(s, step)``: a zero ``r`` of two modes' ``∇F`` refined by Newton's method,
+    and its step in the beam's own scale, as :func:`own_step` for one mode.
+
+    The plane's Newton method (:func:`.plane_newton.newton`) takes its Hessian
+    from differences 1e-6 S wide and stops at steps of 1e-13 S: at a saddle of
+    the second mode just above its load (P4, 4 elements, q = -1e-9 N/m,
+    lambda_2 (1 + 1e-13)), its amplitude 1.7e-6 S, that left the beam 6.8e-8 m
+    high where the saddle is 3.2e-8 m, its residual 5.5e-10 of its energy's
+    parts (which cancel to 1e-13 there), and it was listed ``optimal`` (the
+    whole beam's Newton step, 0.28 of its size).  Here the Hessian comes from
+    differences ``H_REL`` of ``|r|`` wide (widened as :func:`own_step`'s), the
+    Hessian is taken again at each step, the steps are kept only where they
+    lower ``|∇F|`` and stay within ``MERGE S`` or ``PLANE_REACH |r|`` of ``r``,
+    and the last one is measured.
+
+    Parameters
+    ----------
+    dp : DiscreteProblem
+        The problem in the units of the search.
+    grad : callable
+        ``grad(s) -> (F, ∇F, u, ok)``, cached (:func:`.stationary2.find_plane`).
+    hessian : callable
+        ``hessian(s, h) -> H`` from differences of ``∇F`` ``h`` wide, or None.
+    r : ndarray
+        A zero of ``∇F``.
+    S : float
+        The amplitude range's scale.
+    zero_floor : float, optional
+        As :func:`own_step`'s.
+
+    Returns
+    -------
+    s : ndarray
+        The refined zero.
+    step : float
+        The last Newton step's change of the deflection, each component of ``∇F``
+        counted at least its round-off (``LABEL_NOISE`` eps own / size), relative
+        to the beam's largest ``|w|``; ``inf`` where the Hessian could not be told
+        from round-off or a slice failed; 0 where ``∇F`` is exactly 0.
+
+    Examples
+    --------
+    A stand-in whose deflection is the amplitudes, ``∇F = A (s - z)``:
+
+    >>> import numpy as np
+    >>> from types import SimpleNamespace
+    >>> A, z = np.array([[-5.7, 0.0], [0.0, 3e-12]]), np.array([1e-19, 8e-7])
+    >>> grad = lambda s: (0.0, A @ (s - z), np.asarray(s, float), True)
+    >>> hessian = lambda s, h: A
+    >>> dp = SimpleNamespace(G=np.eye(2), energy_size=lambda u: 1e-30,
+    ...                      to_physical=lambda u: (u, 0 * u))
+    >>> s, step = plane_step(dp, grad, hessian, np.array([0.0, 1.7e-6]), 2.0, 1e-26)
+    >>> bool(np.allclose(s, z, rtol=1e-9, atol=0)), bool(step < 1e-9)
+    (True, True)
+    """
+    r = np.asarray(r, float)
+    _, d, u, ok = grad(r)
+    if u is None or not ok:
+        return r, math.inf
+    start, reach = r, max(MERGE * S, PLANE_REACH * float(np.linalg.norm(r)))
+    for _ in range(PLANE_STEPS):
+        if not np.any(d):
+            return r, 0.0
+        found = _plane_slope(dp, grad, hessian, r, S)
+        if found is None:
+            return r, math.inf
+        H, dwds = found
+        try:
+            M = np.linalg.inv(H)
+        except np.linalg.LinAlgError:
+            return r, math.inf
+        t = r - M @ d
+        if not 0.0 < float(np.linalg.norm(t - start)) <= reach:
+            break
+        _, dt, ut, okt = grad(t)
+        if ut is None or not okt or not np.linalg.norm(dt) < np.linalg.norm(d):
+            break
+        r, d, u = t, dt, ut
+    w = dp.to_physical(u)[0]
+    if zero_floor is None:
+        zero_floor = ZERO_ANSWER * S * float(np.max(dwds))
+    size = max(float(np.max(np.abs(w), initial=0.0)), zero_floor)
+    known = LABEL_NOISE / NOISE * round_off(dp, u, float(np.linalg.norm(r)))
+    # (each amplitude's move: the Newton step's, and each component of ∇F's
+    # round-off through the inverse Hessian; H and M at r unless the last step
+    # was taken, where those at the point before it bound it as well)
+    move = float((np.abs(M @ d) + np.abs(M) @ np.full(2, known)) @ dwds)
+    return r, (move / size if size > 0.0 else math.inf)
+
+
+def _plane_slope(dp, grad, hessian, r, S):
+    """``(H, max |dw/ds_j|)`` at ``r`` from differences ``h`` wide (``H_REL |r|``,
+    widened tenfold while ``∇F``'s change across them is round-off, as
+    :func:`_slope`), or None."""
+    _, d, u, _ = grad(r)
+    w = dp.to_physical(u)[0]
+    h = H_REL * max(float(np.linalg.norm(r)), H_MIN * S)
+    noise = round_off(dp, u, float(np.linalg.norm(r)))
+    while h <= max(WIDEST * float(np.linalg.norm(r)), PROBE * S):
+        H = hessian(r, h)
+        if H is None:
+            return None
+        change, dwds = 0.0, np.zeros(2)
+        for j in range(2):
+            for t in (-h, h):
+                e = np.zeros(2)
+                e[j] = t
+                _, dt, ut, okt = grad(r + e)
+                if ut is not None and okt:
+                    change = max(change, float(np.max(np.abs(dt - d))))
+                    dwds[j] = max(dwds[j], float(np.max(np.abs(dp.to_physical(ut)[0] - w))) / h)
+        if change > 10.0 * noise and np.all(np.isfinite(H)):
+            return H, dwds
+        h *= 10.0
+    return None
 
 
 def zero_floor(dp):
