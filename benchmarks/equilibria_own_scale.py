@@ -20,7 +20,8 @@ flat beams pressed on the obstacle have step 0 in both; 17 steps (4e-11 to
 1.2e-6) agree to 6 digits; a 1.6e-17 m beam's 2.1e-14 within 0.2 per cent and
 a 1.3e-16 m beam's 4.3e-16 against 2.5e-16 (round-off).  The float64 Hessian
 solved against the 40-digit gradient (recorded as ``step_f64H``) gave the same
-steps within 12 per cent there; but with the float64 Gauss weights and
+steps within 12 per cent there, and 0.25 to 1.2 times them 1e-13 to 1e-11 above
+the limit (seeds 5201-5202); but with the float64 Gauss weights and
 constants P mu / EI (1e-16 relative) the steps were 0.02 to 7.7 times those:
 1e-10 above the limit the step moves by about eps / (2 (P / P_bar_h - 1)) of the
 beam's size, 5e-7, with every ulp of the data.
