@@ -470,3 +470,22 @@ def test_an_entry_near_the_limit_is_a_zero_in_its_own_scale():
     for e in eqs:
         if e.status == "optimal":
             assert _newton_step(scene, e) <= 1e-6, (e.energy, e.amplitudes)
+
+
+def test_the_unloaded_flat_beam_is_listed_as_w_zero_exactly():
+    """Without load w = 0 is an exact equilibrium (F' = 0 at s = 0).  A P3 beam over a
+    unilateral bed 0.26 mm below, 5.2 P_bar_h, 26 elements (a campaign): Brent's zero
+    1.9e-68 beside s = 0 was listed `optimal` as a beam 3.4e-69 m high, which the
+    whole beam's Newton step moves by its whole size onto w = 0.  Every `optimal`
+    entry is w = 0 exactly or a zero in its own scale."""
+    d = {"beam": {"model": "gao", "supports": "P3", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+                  "half_thickness": 0.1, "width": 1.0},
+         "load": {"axial": 1528111146.3593314}, "mesh": {"elements": 26},
+         "foundation": {"gap": 0.0002582000318065173, "stiffness": 58709802965.10584}}
+    scene = Scene.from_dict(d)
+    eqs = equilibria(scene)
+    flat = [e for e in eqs if not np.any(e.w)]
+    assert len(flat) == 1 and not flat[0].stable and flat[0].status == "optimal"
+    for e in eqs:
+        if e.status == "optimal" and np.any(e.w):
+            assert _newton_step(scene, e) <= 1e-6, (e.energy, e.amplitudes)
