@@ -33,7 +33,9 @@ entry could move only along them.
 Per scene (random ``rand`` scenes: P1-P4, 4-40 elements, no load to 1e6 N/m,
 uniform / table / point loads, no bed, unilateral and bonded beds, obstacles and
 channels, P between P_bar_h and the second mode's load; ``near`` scenes:
-P = P_bar_h (1 + 1e-13 … 1e-4), tiny or no loads):
+P = P_bar_h (1 + 1e-13 … 1e-4), tiny or no loads; ``near2`` scenes, with
+``--near2-seed``: two modes, P = lambda_2 (1 + 1e-13 … 1e-3), 4-12 elements,
+no obstacle):
 
 * ``equilibria`` (``python -m gaocvx equilibria SCENE --json`` of the tree
   ``--src``, in a subprocess with a timeout) and ``solve(scene, "global")``
@@ -79,6 +81,8 @@ ap.add_argument("--out", required=True, help="output directory (scenes/, finding
 ap.add_argument("--files", nargs="*", default=None, help="run only these scene TOML files")
 ap.add_argument("--rand-seed", type=int, default=5201, help="seed of the random scenes (0: none)")
 ap.add_argument("--near-seed", type=int, default=5202, help="seed of the near-limit scenes (0: none)")
+ap.add_argument("--near2-seed", type=int, default=0,
+                help="seed of the two-mode scenes just above lambda_2 (0: none)")
 ap.add_argument("--count", type=int, default=30, help="scenes per seed (interleaved)")
 ap.add_argument("--first", type=int, default=0, help="index of the first scene of each seed")
 ap.add_argument("--budget", type=float, default=3300.0, help="wall seconds for the whole run")
@@ -218,6 +222,26 @@ def gen_near(rng):
     return data, ["near", sup, f"n{n}", qk, bed, f"gap{gap:.2g}", f"eps{eps:.2g}"]
 
 
+def gen_near2(rng):
+    """Two unstable modes: P = lambda_2 (1 + eps), eps 1e-13 .. 1e-3, 4-12 elements,
+    tiny to moderate loads, no bed or a bed (no obstacle: two-mode obstacle lists
+    take minutes).  The second mode's saddles there have amplitudes
+    sqrt(eps) of the first's, along a curvature eps of the stiffness."""
+    sup = str(rng.choice(["P1", "P2", "P3", "P4"]))
+    n = int(rng.integers(4, 13))
+    eps = logu(rng, 1e-13, 1e-3)
+    load, qk = {}, "none"
+    if rng.random() >= 0.2:
+        Q = logu(rng, 1e-12, 1e3)
+        sign = -1.0 if rng.random() < 0.7 else 1.0
+        load["q"], qk = sign * Q, f"q{sign * Q:.2g}"
+    data = {"beam": {"model": "gao", "supports": sup, **BEAM}, "load": load, "mesh": {"elements": n}}
+    bed, gap = contact(rng, data, (0.4, 0.75, 1.01, 1.01), 0.3, False)
+    _, (_, l2) = limits(data)
+    data["load"]["axial"] = l2 * (1 + eps)
+    return data, ["near2", sup, f"n{n}", qk, bed, f"gap{gap:.2g}", f"eps{eps:.2g}"]
+
+
 def scene_stream():
     """(name, data, tags) in the order to run: the two seeds interleaved."""
     if args.files is not None:
@@ -225,12 +249,15 @@ def scene_stream():
             with open(f, "rb") as fh:
                 yield os.path.splitext(os.path.basename(f))[0], tomllib.load(fh), ["file", f]
         return
-    plan = [(s, m) for s, m in ((args.rand_seed, "rand"), (args.near_seed, "near")) if s]
+    plan = [(s, m) for s, m in ((args.rand_seed, "rand"), (args.near_seed, "near"),
+                                (args.near2_seed, "near2")) if s]
+    make = {"rand": (gen_rand, "r"), "near": (gen_near, "n"), "near2": (gen_near2, "m")}
     for i in range(args.first, args.first + args.count):
         for seed, mode in plan:
             rng = np.random.default_rng([seed, i])
-            data, tags = (gen_rand if mode == "rand" else gen_near)(rng)
-            yield f"{seed}_{mode[0]}{i}", data, tags
+            gen, letter = make[mode]
+            data, tags = gen(rng)
+            yield f"{seed}_{letter}{i}", data, tags
 
 
 # ---------------------------------------------------------------- the library, apart
@@ -385,8 +412,8 @@ def summary(recs, elapsed):
     cmp_ = [r for r in recs if "cmp_dE" in r]
     ratio = [e["step_f64H"] / e["step"] for e in ents if e.get("step_f64H") is not None
              and math.isfinite(e["step"]) and e["step"] > 1e-12]
-    rows = [("scenes (rand / near)", f"{len(recs)} ({sum(r['tags'][0] == 'rand' for r in recs)} / "
-                                     f"{sum(r['tags'][0] == 'near' for r in recs)})"),
+    kinds = " / ".join(str(sum(r["tags"][0] == k for r in recs)) for k in ("rand", "near", "near2"))
+    rows = [("scenes (rand / near / near2)", f"{len(recs)} ({kinds})"),
             ("entries (stable / unstable)", f"{len(ents)} ({sum(e['stability'] == 'stable' for e in ents)}"
                                             f" / {sum(e['stability'] != 'stable' for e in ents)})"),
             ("optimal entries", str(len(opt))),
