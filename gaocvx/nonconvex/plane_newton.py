@@ -83,6 +83,22 @@ def at_roots(dp, grad, hessian, roots, S, known=(), strict=False, floor=0.0,
     (:func:`.zero_step.plane_step`; ``zero_floor`` the floor under its size).
     """
     out, have = [], [np.asarray(k, float) for k in known]
+
+    def polished(u, r):
+        # the zero polished on the whole beam, listed unless listed already; False
+        # where the polish fails or ends elsewhere
+        e = polish(u)
+        if e is None or not same_point(e.amplitudes, r, S):
+            return False
+        if not any(same_point(e.amplitudes, h, S) for h in have):
+            # (listed at the zero's amplitudes, where its slices were solved,
+            # during the search: the steps after it probe F there; the polished
+            # beam's own replace them at the end, whole_beam.settle)
+            e.amplitudes = [float(a) for a in r]
+            have.append(np.asarray(r, float))
+            out.append(e)
+        return True
+
     for r in roots:
         if any(same_point(r, h, S) for h in have):
             continue
@@ -90,27 +106,23 @@ def at_roots(dp, grad, hessian, roots, S, known=(), strict=False, floor=0.0,
         size = dp.energy_size(u) or 1.0
         work = float(np.linalg.norm(d)) * max(float(np.linalg.norm(r)), 1e-3 * S)
         res = work / size
-        if res > ROOT_TOL and polish is not None and ok and work <= ROOT_TOL * max(size, floor):
-            e = polish(u)
-            if e is not None and same_point(e.amplitudes, r, S):
-                if not any(same_point(e.amplitudes, h, S) for h in have):
-                    # (listed at the zero's amplitudes, where its slices were
-                    # solved, during the search: the steps after it probe F
-                    # there; the polished beam's own replace them at the end,
-                    # whole_beam.settle)
-                    e.amplitudes = [float(a) for a in r]
-                    have.append(np.asarray(r, float))
-                    out.append(e)
-                continue
+        if res > ROOT_TOL and polish is not None and ok and work <= ROOT_TOL * max(size, floor) \
+                and polished(u, r):
+            continue
         if res > (ROOT_TOL if strict else 1e3 * ROOT_TOL):  # Newton did not converge
             continue
         step = math.inf
         if ok and res <= ROOT_TOL:
-            # (refined and measured in the beam's own scale)
+            # (refined and measured in the beam's own scale; one that fails it goes
+            # to the whole beam where there is an obstacle, as one mode's zeros)
             r, step = plane_step(dp, grad, hessian, r, S, zero_floor)
             F, d, u, ok = grad(r)
             size = dp.energy_size(u) or 1.0
             res = float(np.linalg.norm(d)) * max(float(np.linalg.norm(r)), 1e-3 * S) / size
+            if step > STEP_TOL and polish is not None and ok and polished(u, r):
+                continue
+            if any(same_point(r, h, S) for h in have):
+                continue
         H = hessian(r)
         if H is None:
             continue
