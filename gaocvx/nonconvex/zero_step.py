@@ -231,9 +231,12 @@ def plane_step(dp, grad, hessian, r, S, zero_floor=None) -> tuple:
 
 def _plane_slope(dp, grad, hessian, r, S):
     """``(H, max |dw/ds_j|)`` at ``r`` from differences ``h`` wide (``H_REL |r|``,
-    widened tenfold while ``∇F``'s change across them is round-off, as
-    :func:`_slope`), or None."""
-    _, d, u, _ = grad(r)
+    widened tenfold while ``∇F``'s change across them along any of H's
+    eigenvectors, ``|mu| h``, is within ten times its round-off, as
+    :func:`_slope`), or None.  (Every direction: a flat second mode's curvature
+    read from round-off, while the first mode's change cleared it, would shorten
+    the step measured along it.)"""
+    _, _, u, _ = grad(r)
     w = dp.to_physical(u)[0]
     h = H_REL * max(float(np.linalg.norm(r)), H_MIN * S)
     noise = round_off(dp, u, float(np.linalg.norm(r)))
@@ -241,16 +244,17 @@ def _plane_slope(dp, grad, hessian, r, S):
         H = hessian(r, h)
         if H is None:
             return None
-        change, dwds = 0.0, np.zeros(2)
-        for j in range(2):
-            for t in (-h, h):
-                e = np.zeros(2)
-                e[j] = t
-                _, dt, ut, okt = grad(r + e)
-                if ut is not None and okt:
-                    change = max(change, float(np.max(np.abs(dt - d))))
-                    dwds[j] = max(dwds[j], float(np.max(np.abs(dp.to_physical(ut)[0] - w))) / h)
-        if change > 10.0 * noise and np.all(np.isfinite(H)):
+        if np.all(np.isfinite(H)) and \
+                float(np.min(np.abs(np.linalg.eigvalsh(H)))) * h > 10.0 * noise:
+            dwds = np.zeros(2)
+            for j in range(2):
+                for t in (-h, h):
+                    e = np.zeros(2)
+                    e[j] = t
+                    _, _, ut, okt = grad(r + e)
+                    if ut is not None and okt:
+                        dwds[j] = max(dwds[j],
+                                      float(np.max(np.abs(dp.to_physical(ut)[0] - w))) / h)
             return H, dwds
         h *= 10.0
     return None
