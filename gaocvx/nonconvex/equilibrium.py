@@ -168,10 +168,10 @@ class Equilibrium:
         global method (with an obstacle), and for an equilibrium polished on
         the whole beam, its certificate's stationarity.
     status : str
-        "optimal" when the fixed-amplitude solve and the zero are accurate (with
-        one mode also in the beam's own scale: a Newton step on F' moves its
-        deflection by at most 1e-6 of its largest |w|, :mod:`.zero_step`),
-        else "inaccurate".
+        "optimal" when the fixed-amplitude solve and the zero are accurate (also
+        in the beam's own scale: a Newton step on F', with two modes on ∇F,
+        moves its deflection by at most 1e-6 of its largest |w|,
+        :mod:`.zero_step`), else "inaccurate".
     P : float
         The axial force [N].
     curvature : float
