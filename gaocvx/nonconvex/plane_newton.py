@@ -84,6 +84,11 @@ def at_roots(dp, grad, hessian, roots, S, known=(), strict=False, floor=0.0,
     """
     out, have = [], [np.asarray(k, float) for k in known]
 
+    def residual(r, d, u):
+        # (|grad F| max(|s|, 1e-3 S), and that over the energy's parts)
+        work = float(np.linalg.norm(d)) * max(float(np.linalg.norm(r)), 1e-3 * S)
+        return work, work / (dp.energy_size(u) or 1.0)
+
     def polished(u, r):
         # the zero polished on the whole beam, listed unless listed already; False
         # where the polish fails or ends elsewhere
@@ -104,8 +109,7 @@ def at_roots(dp, grad, hessian, roots, S, known=(), strict=False, floor=0.0,
             continue
         F, d, u, ok = grad(r)
         size = dp.energy_size(u) or 1.0
-        work = float(np.linalg.norm(d)) * max(float(np.linalg.norm(r)), 1e-3 * S)
-        res = work / size
+        work, res = residual(r, d, u)
         if res > ROOT_TOL and polish is not None and ok and work <= ROOT_TOL * max(size, floor) \
                 and polished(u, r):
             continue
@@ -117,8 +121,7 @@ def at_roots(dp, grad, hessian, roots, S, known=(), strict=False, floor=0.0,
             # to the whole beam where there is an obstacle, as one mode's zeros)
             r, step = plane_step(dp, grad, hessian, r, S, zero_floor)
             F, d, u, ok = grad(r)
-            size = dp.energy_size(u) or 1.0
-            res = float(np.linalg.norm(d)) * max(float(np.linalg.norm(r)), 1e-3 * S) / size
+            res = residual(r, d, u)[1]
             if step > STEP_TOL and polish is not None and ok and polished(u, r):
                 continue
             if any(same_point(r, h, S) for h in have):

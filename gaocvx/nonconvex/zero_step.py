@@ -122,13 +122,7 @@ def own_step(dp, dF, r, S, error=None, zero_floor=None) -> tuple:
         r, d, u = t, dt, ut
         if d == 0.0:
             return r, 0.0
-    w = dp.to_physical(u)[0]
-    # (without load no linear answer: the floor is that fraction of the deflection
-    # the range's amplitude S makes -- the flat beam of an unloaded bed 8.4e-10 m
-    # below, listed 1.2e-30 m off w = 0, is zero, not 100 % off its own size)
-    if zero_floor is None:
-        zero_floor = ZERO_ANSWER * S * dwds
-    size = max(float(np.max(np.abs(w), initial=0.0)), zero_floor)
+    size = _size(dp, u, S, dwds, zero_floor)
     # (|F'| at least its round-off: a zero F''s scatter makes is known only that
     # well -- without load 1e-12 above P_bar_h, 16 elements, F' was 3e-20 at a
     # buckled beam, its round-off 2e-18, and the beam 4.7e-5 of its size from a
@@ -217,10 +211,7 @@ def plane_step(dp, grad, hessian, r, S, zero_floor=None) -> tuple:
         if ut is None or not okt or not np.linalg.norm(dt) < np.linalg.norm(d):
             break
         r, d, u = t, dt, ut
-    w = dp.to_physical(u)[0]
-    if zero_floor is None:
-        zero_floor = ZERO_ANSWER * S * float(np.max(dwds))
-    size = max(float(np.max(np.abs(w), initial=0.0)), zero_floor)
+    size = _size(dp, u, S, float(np.max(dwds)), zero_floor)
     known = LABEL_NOISE / NOISE * round_off(dp, u, float(np.linalg.norm(r)))
     # (each amplitude's move: the Newton step's, and each component of ∇F's
     # round-off through the inverse Hessian; H and M at r unless the last step
@@ -258,6 +249,18 @@ def _plane_slope(dp, grad, hessian, r, S):
             return H, dwds
         h *= 10.0
     return None
+
+
+def _size(dp, u, S, dwds, zero_floor):
+    """The beam ``u``'s largest ``|w|`` [m], at least ``zero_floor`` (without load,
+    None: ``ZERO_ANSWER`` of the deflection the amplitude ``S`` makes, ``dwds``
+    the largest ``|dw/ds|``)."""
+    # (without load no linear answer: the floor is that fraction of the deflection
+    # the range's amplitude S makes -- the flat beam of an unloaded bed 8.4e-10 m
+    # below, listed 1.2e-30 m off w = 0, is zero, not 100 % off its own size)
+    if zero_floor is None:
+        zero_floor = ZERO_ANSWER * S * dwds
+    return max(float(np.max(np.abs(dp.to_physical(u)[0]), initial=0.0)), zero_floor)
 
 
 def zero_floor(dp):
