@@ -270,9 +270,10 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
     # (a zero within 1e-9 S of s = 0 where F' is exactly 0, w = 0 without load, is
     # that one: Brent's 1.9e-68 beside it was listed as a beam 3.4e-69 m high, its
     # own-scale Newton step its whole size -- P3 on a bed, unloaded: a campaign)
-    if lo <= 0.0 <= hi and any(0.0 < abs(r) <= 1e-9 * S for r in roots) \
-            and dF(0.0)[1] == 0.0 and dF(0.0)[2] is not None and dF(0.0)[3]:
-        roots = [0.0 if abs(r) <= 1e-9 * S else r for r in roots]
+    if lo <= 0.0 <= hi and any(0.0 < abs(r) <= 1e-9 * S for r in roots):
+        _, slope0, beam0, ok0 = dF(0.0)
+        if slope0 == 0.0 and beam0 is not None and ok0:
+            roots = [0.0 if abs(r) <= 1e-9 * S else r for r in roots]
     zeros = []   # (within 1e-9 S of an end or a zero before it: the same one)
     for r in sorted(set(roots)):
         if not any(abs(r - e) <= 1e-9 * S for e in [q.amplitudes[0] for q in out] + zeros):
