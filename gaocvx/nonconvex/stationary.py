@@ -54,7 +54,7 @@ from ..scene import check_solve_arguments, numbers_of, whole
 from .bounds import check_bounded, equilibrium_box, estimate_boxes, zoom_boxes
 from . import stationary1 as line
 from .equilibrium import Equilibrium, check_has_minimum, check_mountain_pass, same_point
-from .flat_bed import near_flat
+from .near_flat import near_flat
 from .images import complete_beams
 from .at_limit import flat_at_limit
 from .probes import classify as classify_zero, hessian_stability
@@ -314,12 +314,14 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
             out = sorted(settle(dp, polish, exact_flat(dp, modes, out, classify, S=S), S,
                                 modes),
                          key=lambda e: e.energy)
+    if out and None not in out:
+        # the beams near w = 0 on a bed or an obstacle at gap 0, in their own scale
+        # (:mod:`.near_flat`)
+        out = sorted(near_flat(dp, modes, out, S, zero_floor(dp), polish),
+                     key=lambda e: e.energy)
     if obstacle and None not in out:
         # the mirror image of each beam polished on the whole beam (:mod:`.images`)
         out = sorted(complete_beams(dp, polish, out), key=lambda e: e.energy)
-    if out and all(e is not None for e in out) and not obstacle:
-        # the beams near w = 0 on a bed at gap 0, in their own scale (:mod:`.flat_bed`)
-        out = sorted(near_flat(dp, modes, out, S, zero_floor(dp)), key=lambda e: e.energy)
     if out and all(e is not None for e in out):
         for e in out:
             u = dp.from_physical(e.w, e.slope)

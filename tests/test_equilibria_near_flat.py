@@ -1,4 +1,4 @@
-"""Near-flat equilibria on a unilateral bed at gap 0 (gaocvx.nonconvex.flat_bed).
+"""Near-flat equilibria on a unilateral bed at gap 0 (gaocvx.nonconvex.near_flat).
 
 A load far below the buckled beam's scale presses the beam 1e-13 m into a bed
 at gap 0.  There the bed's edge splits the near-flat beam into equilibria closer
@@ -114,3 +114,24 @@ def test_the_hessian_decides_with_points_near_the_beds_edge_released_and_held():
         assert np.abs(depth).min() < 1e-3 * np.abs(depth).max()
         assert hessian_stability(dp, u) is stable
         assert hessian_stability(dp, u, margin=1e-6) is stable
+
+
+def test_on_an_obstacle_at_gap_0_the_lifted_saddle_beside_the_flat_beam_is_listed():
+    # P1, one mode: before, the buckled beam and w = 0 pressed flat, two minima
+    # without the saddle between them, and the list `inaccurate`
+    data = {"beam": {**BEAM, "supports": "P1"},
+            "load": {"q": -0.0026624409517740765, "axial": 6.0e9},
+            "mesh": {"elements": 7}, "obstacle": {"gap": 0.0}}
+    scene = Scene.from_dict(data)
+    en = Discrete(scene, W=1e-13)
+    x = np.zeros(en.n)
+    for _ in range(5):     # (the free beam's: its energy is all but quadratic here)
+        x = x - np.linalg.solve(en.hessian(x), en(x)[1])
+    lifted = en.nodal_w(x)
+    assert np.all(lifted[1:-1] > 0) and np.all(en._local(x)[5] > 0)   # (clear of it)
+    assert np.linalg.eigvalsh(en.hessian(x)).min() < 0
+    eqs = equilibria(scene)
+    assert all(e.status == "optimal" for e in eqs)
+    hits = [e for e in eqs if np.max(np.abs(e.w - lifted)) <= 1e-6 * np.max(lifted)]
+    assert len(hits) == 1 and not hits[0].stable
+    assert sorted(e.stable for e in eqs) == [False, True, True]

@@ -1,0 +1,190 @@
+"""Equilibria near w = 0 on a bed or an obstacle at gap 0, found in their own scale.
+
+A load far smaller than the buckled beam's scale presses the beam into a bed at
+gap 0 by as little as 1e-13 of the amplitude range ``S``; there the bed's edge
+(``g - w = 0``) splits the near-flat beam into several equilibria: pressed into
+the bed (a strict local minimum where the bed outweighs the axial force),
+lifted off it (the free beam's linear answer, which above the first mode's load
+rises against the load: unstable), and some in between.  They lie far closer
+than the searches' merging distance and the probes' 1e-6 S, whose slices are
+accurate relative to the scene's energy: a P1 beam of 7 elements at 1.28
+P_bar_h, pressed 9.5e-14 m by q = -2.7e-3 N/m, was listed once, unstable, where
+it is a strict local minimum and its lifted twin 1.5e-13 m up the saddle
+between it and the buckled beam.  On an obstacle at gap 0 the pressed beam is
+w = 0 (:func:`.obstacle_checks.exact_flat`), and its lifted twin, the saddle
+between it and the buckled beam, was missing the same way (one mode: the list
+`inaccurate` by the mountain-pass rule).
+
+Here Newton's method on the whole beam starts from the linear answers (with
+every bed point held, and with every one released), and from those moved along
+each unstable mode.  On a bed it is semismooth Newton on the gradient (the
+bed's Hessian on the points it holds); an end whose last step moves the
+deflection by at most ``STEP_TOL`` of its largest ``|w|`` (at least the zero
+floor), and whose stability the Hessian decides
+(:func:`.probes.hessian_stability`), is an equilibrium certified in its own
+scale.  On an obstacle (one unstable mode) the free beam's start is polished by
+:func:`.whole_beam.polish_equilibrium` (active set, certificate and
+second-order conditions in its own scale); where the polish moves too far from
+it, nothing is added (a P2 beam at gap 0 under q = -2.7e-3 N/m: its saddle
+touching the obstacle is still missing, and the list `inaccurate`).  Ends
+within ``NEAR`` S of s = 0 are added where no listed one has their beam.
+Nothing is claimed of other equilibria there: the list's completeness is the
+searches' (within their merging distance of a listed one).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .equilibrium import Equilibrium
+from .probes import hessian_stability
+from .whole_beam import MAX_UNKNOWNS, same_beam
+from .zero_step import STEP_TOL
+
+__all__ = ["near_flat"]
+
+log = logging.getLogger(__name__)
+
+#: Newton steps from each start at most (the held points change one by one).
+MAX_STEPS = 60
+#: The starts' moves along each unstable mode, in units of the linear answer's
+#: largest DOF (a P1 beam, two modes, 7 elements: the lifted beam was found from
+#: the linear answers, the two saddles holding three points near one end only
+#: from moves along the second mode).
+MOVES = (-4.0, -1.0, -0.25, 0.25, 1.0, 4.0)
+#: Ends farther from s = 0 than this times S are left to the searches.
+NEAR = 1e-4
+#: Beams within this (:func:`.whole_beam.same_beam`) of a listed one are that one.
+SAME = 1e-4
+
+
+def near_flat(dp, modes, out, S, zero_floor, polish=None) -> list:
+    """``out`` with the near-flat equilibria on a unilateral bed or an obstacle added.
+
+    Parameters
+    ----------
+    dp : DiscreteProblem
+        The scene above P_bar_h, with a unilateral foundation or an obstacle, and
+        a load (else ``out`` is returned as it is), at most ``MAX_UNKNOWNS`` free
+        DOFs.
+    modes : Modes
+        Its unstable modes: the starts' directions, and the amplitudes of an
+        added entry (``(G phi)ᵀ u``).
+    out : list of Equilibrium
+        The searches' list.
+    S : float
+        The amplitude range's scale: only ends within ``NEAR`` S of s = 0 are
+        added (farther, the searches resolve the equilibria themselves).
+    zero_floor : float or None
+        The deflection [m] below which a beam counts as zero
+        (:func:`.zero_step.zero_floor`; None without load).
+    polish : callable, optional
+        With an obstacle, :func:`.whole_beam.polisher`'s (else, or with two
+        unstable modes, nothing is added).
+
+    Returns
+    -------
+    list of Equilibrium
+        ``out`` and the equilibria found that are not listed (``optimal``,
+        ``whole_beam``; on a bed their residual the last Newton step); a listed
+        entry that is not ``optimal`` and has the beam of one found gives way
+        to it.
+    """
+    bed = dp.contact == "foundation" and not dp.bilateral
+    # (with an obstacle one mode only: two modes' second search in the flat beam's
+    # own scale finds these, :func:`.zooms.own_scale`, and each polish is dense)
+    pressed = dp.contact == "obstacle" and polish is not None and modes.k == 1
+    if not (bed or pressed) or zero_floor is None or not 0 < dp.n <= MAX_UNKNOWNS:
+        return out
+    out = list(out)
+    added = []
+    for u in _starts(dp, modes, held=(True, False) if bed else (False,)):
+        e = _bed_end(dp, modes, u, zero_floor) if bed else polish(u)
+        if e is None or not float(np.linalg.norm(e.amplitudes)) <= NEAR * S:
+            continue
+        same = [o for o in out + added if same_beam(e, o, SAME)]
+        if any(o.status == "optimal" for o in same):
+            continue
+        out = [o for o in out if all(o is not t for t in same)]
+        log.info("equilibria: a near-flat %s equilibrium, max|w| %.3g m, added%s",
+                 "stable" if e.stable else "unstable", float(np.max(np.abs(e.w))),
+                 f" in place of {len(same)} listed, not optimal" if same else "")
+        added.append(e)
+    return out + added
+
+
+def _starts(dp, modes, held):
+    """The linear answers with every foundation point held (``True`` in ``held``)
+    and released (``False``; with an obstacle, the free beam's), each also moved
+    along each unstable mode by ``MOVES`` times its largest DOF."""
+    bed = dp.contact == "foundation"
+    for hold in held:
+        # (at u = 0 the Gao term's Hessian is zero: the linear answer's system)
+        H0, rhs = dp.hessian(np.zeros(dp.n)), dp.f
+        if bed:
+            points = np.full(dp.Nq.shape[0], float(hold))
+            H0 = H0 - _bed(dp, dp.g > 0) + _bed(dp, points)
+            rhs = rhs + dp.NqT @ (dp.c * dp.wq_c * points * dp.g)
+        u0 = _solve(H0, rhs)
+        if u0 is None:
+            continue
+        size = float(np.max(np.abs(u0)))
+        yield u0
+        for j in range(modes.k):
+            v = modes.phi[:, j] / float(np.max(np.abs(modes.phi[:, j])))
+            for a in MOVES:
+                yield u0 + a * size * v
+
+
+def _bed_end(dp, modes, u, zero_floor):
+    """The equilibrium Newton's method on a bed ends at from ``u``, certified in its
+    own scale and of a decided stability, or None."""
+    end = _newton(dp, u, zero_floor)
+    if end is None:
+        return None
+    u, step = end
+    stable = hessian_stability(dp, u)
+    if stable is None:
+        return None
+    w, slope = dp.to_physical(u)
+    return Equilibrium(float(dp.energy(u) * dp.E0), bool(stable),
+                       [float(a) for a in modes.phi.T @ (dp.G @ u)], dp.x.copy(), w, slope,
+                       float(step), "optimal", float(dp.P), math.nan, float(dp.W),
+                       whole_beam=True)
+
+
+def _bed(dp, points):
+    """The foundation's Hessian on the quadrature points marked by ``points``."""
+    return dp.NqT @ sp.diags(dp.c * dp.wq_c * points) @ dp.Nq
+
+
+def _newton(dp, u, zero_floor):
+    """``(u, step)``: Newton's end from ``u`` and its last step (not taken)
+    relative to the beam's size; None where it does not come within ``STEP_TOL``."""
+    last = None
+    for _ in range(MAX_STEPS):
+        du = _solve(dp.hessian(u), -dp.gradient(u))
+        if du is None:
+            break
+        w, dw = dp.to_physical(u)[0], dp.to_physical(du)[0]
+        size = max(float(np.max(np.abs(w))), zero_floor)
+        step = float(np.max(np.abs(dw))) / size if size > 0 else math.inf
+        if last is not None and last[1] <= STEP_TOL and not step < last[1]:
+            break      # (converged: round-off, or a point at the edge)
+        last = (u, step)
+        u = u + du
+    return last if last is not None and last[1] <= STEP_TOL else None
+
+
+def _solve(H, r):
+    """``H⁻¹ r`` by a sparse LU, or None where ``H`` is singular."""
+    try:
+        x = spla.spsolve(sp.csc_matrix(H), r)
+    except (RuntimeError, ValueError):
+        return None
+    return x if np.all(np.isfinite(x)) else None
