@@ -626,15 +626,20 @@ def test_a_beam_pressed_a_nanometre_into_a_stiff_bed_is_a_stable_minimum(element
             "foundation": {"gap": 0.0, "stiffness": 1.4e11, "kind": "unilateral"}}
     scene = Scene.from_dict(data)
     eqs = equilibria(scene)
-    pressed = [e for e in eqs if abs(e.energy) < 1e-3]
+    pressed = [e for e in eqs if abs(e.energy) < 1e-3 and e.stable]
     assert len(pressed) == 1 and np.max(np.abs(pressed[0].w)) < 1e-8
     en = Discrete(scene, 1e-9)
     x = en.from_nodal(pressed[0].w, pressed[0].slope)
     assert np.all(en.N @ x < 0)              # inside the bed at every point: smooth
     eig = sla.eigh(en.hessian(x), en.stiffness(), eigvals_only=True)
     assert eig[0] > 0.1 and pressed[0].stable
-    # (two minima and no saddle listed: the list says it misses one)
-    assert any(not e.stable for e in eqs) or all(e.status == "inaccurate" for e in eqs)
+    # and the saddles beside it (near_flat): the independent energy's Newton method
+    # from 300 random starts (2000 at 2 elements) finds a mirror pair holding some
+    # of its points (index 1) and the beam lifted off the bed (index 2); before,
+    # two minima and no saddle were listed, every entry `inaccurate`
+    assert all(e.status == "optimal" for e in eqs)
+    near = [e for e in eqs if np.max(np.abs(e.w)) < 1e-8]
+    assert sorted(e.stable for e in near) == [False, False, False, True]
 
 
 def test_the_whole_beam_stability_is_the_independent_hessians():

@@ -18,9 +18,9 @@ between it and the buckled beam, was missing the same way (one mode: the list
 Here Newton's method on the whole beam starts from the linear answers (with
 every bed point held, and with every one released), and from those moved along
 each unstable mode.  On a bed it is semismooth Newton on the gradient (the
-bed's Hessian on the points it holds); an end whose last step moves the
-deflection by at most ``STEP_TOL`` of its largest ``|w|`` (at least the zero
-floor), and whose stability the Hessian decides
+bed's Hessian on the points it holds); an end whose last step moves its
+DOFs (deflections, and slopes times L) by at most ``STEP_TOL`` of their largest
+(at least the zero floor), and whose stability the Hessian decides
 (:func:`.probes.hessian_stability`), is an equilibrium certified in its own
 scale.  On an obstacle (one unstable mode) the free beam's start is polished by
 :func:`.whole_beam.polish_equilibrium` (active set, certificate and
@@ -165,15 +165,18 @@ def _bed(dp, points):
 
 def _newton(dp, u, zero_floor):
     """``(u, step)``: Newton's end from ``u`` and its last step (not taken)
-    relative to the beam's size; None where it does not come within ``STEP_TOL``."""
+    relative to the beam's size (the largest of its DOFs, at least the zero
+    floor); None where it does not come within ``STEP_TOL``."""
     last = None
     for _ in range(MAX_STEPS):
         du = _solve(dp.hessian(u), -dp.gradient(u))
         if du is None:
             break
-        w, dw = dp.to_physical(u)[0], dp.to_physical(du)[0]
-        size = max(float(np.max(np.abs(w))), zero_floor)
-        step = float(np.max(np.abs(dw))) / size if size > 0 else math.inf
+        # (in all DOFs, deflections and slopes L / W alike: measured on the
+        # deflections alone, a beam of 2 elements converged on its one inner
+        # node's w with its slopes half their size off a zero)
+        size = max(float(np.max(np.abs(u))), zero_floor / dp.W)
+        step = float(np.max(np.abs(du))) / size if size > 0 else math.inf
         if last is not None and last[1] <= STEP_TOL and not step < last[1]:
             break      # (converged: round-off, or a point at the edge)
         last = (u, step)
