@@ -166,7 +166,9 @@ class Equilibrium:
         holding the beam), ``|F'|`` times the width of the bracket that holds
         the equilibrium; for the certified global minimiser listed from the
         global method (with an obstacle), and for an equilibrium polished on
-        the whole beam, its certificate's stationarity.
+        the whole beam, its certificate's stationarity; for one found near
+        w = 0 on a bed at gap 0 (:mod:`.near_flat`), its last Newton step over
+        its largest DOF.
     status : str
         "optimal" when the fixed-amplitude solve and the zero are accurate (also
         in the beam's own scale: a Newton step on F', with two modes on ∇F,
