@@ -98,8 +98,8 @@ def near_flat(dp, modes, out, S, zero_floor, polish=None) -> list:
     bed = dp.contact == "foundation" and not dp.bilateral
     # (with an obstacle one mode only: two modes' second search in the flat beam's
     # own scale finds these, :func:`.zooms.own_scale`, and each polish is dense)
-    pressed = dp.contact == "obstacle" and polish is not None and modes.k == 1
-    if not (bed or pressed) or zero_floor is None or not 0 < dp.n <= MAX_UNKNOWNS:
+    obstacle = dp.contact == "obstacle" and polish is not None and modes.k == 1
+    if not (bed or obstacle) or zero_floor is None or not 0 < dp.n <= MAX_UNKNOWNS:
         return out
     out = list(out)
     added = []
