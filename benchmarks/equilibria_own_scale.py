@@ -305,7 +305,7 @@ def newton_step(scene, w, slope):
     if len(act):
         Z = sla.null_space(R[act])
         if Z.shape[1] == 0:
-            return 0.0, 0.0, len(act)
+            return 0.0, 0.0, len(act), 0.0, None
         Zm = mpmath.matrix(Z.tolist())
         du40 = Zm * mpmath.lu_solve(Zm.T * H * Zm, Zm.T * mpmath.matrix(g.tolist()))
         Hf = Z.T @ en.hessian(x) @ Z
