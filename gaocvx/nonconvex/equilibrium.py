@@ -168,7 +168,7 @@ class Equilibrium:
         global method (with an obstacle), and for an equilibrium polished on
         the whole beam, its certificate's stationarity; for one found near
         w = 0 on a bed at gap 0 (:mod:`.near_flat`), its last Newton step over
-        its largest DOF.
+        its largest DOF (at least the zero floor).
     status : str
         "optimal" when the fixed-amplitude solve and the zero are accurate (also
         in the beam's own scale: a Newton step on F', with two modes on ∇F,

@@ -327,8 +327,8 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
             u = dp.from_physical(e.w, e.slope)
             e.energy_scale = float(dp.energy_size(u) * dp.E0)
             e.complete = complete
-            # (the stability at the beam's own scale, where the energy is smooth
-            # there: the probes of F step 1e-6 S, :func:`.probes.hessian_stability`)
+            # (the stability at the beam's own scale, where the energy's Hessian
+            # decides it: the probes of F step 1e-6 S, :func:`.probes.hessian_stability`)
             verdict = hessian_stability(dp, u) if e.status == "optimal" else None
             if verdict is not None and verdict != bool(e.stable):
                 log.info("equilibria: an entry at %.4g J is %s by the energy's Hessian, not "
