@@ -127,15 +127,21 @@ class HermiteEnergy:
             r -= self.NqT @ (self.c * self.wq_c * pen)
         return r
 
-    def hessian(self, u) -> sp.csr_matrix:
-        """(Generalised) Hessian of the non-dimensional energy; banded, SPD below P_bar_h."""
+    def hessian(self, u, active=None) -> sp.csr_matrix:
+        """(Generalised) Hessian of the non-dimensional energy; banded, SPD below P_bar_h.
+
+        ``active`` marks the foundation's quadrature points whose term is held
+        (default: those with ``g - w > 0``, every one on a bilateral bed); the
+        near-flat searches hold or release points at the bed's edge by it.
+        """
         u = np.asarray(u, float)
         H = self.K - self.p * self.G if self.p else self.K.copy()
         if self.needs_gao:
             s = self.B1 @ u
             H = H + self.B1T @ sp.diags(self.a * self.wq_gao * s**2) @ self.B1
         if self.contact == "foundation":
-            active = (self.g - self.Nq @ u) > 0 if not self.bilateral else 1.0
+            if active is None:
+                active = (self.g - self.Nq @ u) > 0 if not self.bilateral else 1.0
             H = H + self.NqT @ sp.diags(self.c * self.wq_c * active) @ self.Nq
         return H.tocsr()
 

@@ -125,11 +125,13 @@ def _starts(dp, modes, held):
     bed = dp.contact == "foundation"
     for hold in held:
         # (at u = 0 the Gao term's Hessian is zero: the linear answer's system)
-        H0, rhs = dp.hessian(np.zeros(dp.n)), dp.f
+        zero, rhs = np.zeros(dp.n), dp.f
         if bed:
             points = np.full(dp.Nq.shape[0], float(hold))
-            H0 = H0 - _bed(dp, dp.g > 0) + _bed(dp, points)
+            H0 = dp.hessian(zero, active=points)
             rhs = rhs + dp.NqT @ (dp.c * dp.wq_c * points * dp.g)
+        else:
+            H0 = dp.hessian(zero)
         u0 = _solve(H0, rhs)
         if u0 is None:
             continue
@@ -156,11 +158,6 @@ def _bed_end(dp, modes, u, zero_floor):
                        [float(a) for a in modes.phi.T @ (dp.G @ u)], dp.x.copy(), w, slope,
                        float(step), "optimal", float(dp.P), math.nan, float(dp.W),
                        whole_beam=True)
-
-
-def _bed(dp, points):
-    """The foundation's Hessian on the quadrature points marked by ``points``."""
-    return dp.NqT @ sp.diags(dp.c * dp.wq_c * points) @ dp.Nq
 
 
 def _newton(dp, u, zero_floor):

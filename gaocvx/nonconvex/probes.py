@@ -20,7 +20,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.sparse as sp
 
 from .roundoff import LABEL_NOISE, NOISE, round_off
 
@@ -213,12 +212,9 @@ def hessian_stability(dp, u, margin: float = 1e-3):
         size = max(float(np.max(np.abs(depth))), float(np.max(np.abs(w))))
         near = np.abs(depth) <= margin * size
         if np.any(near):
-            def bed(points):   # the foundation's Hessian at the points marked
-                return dp.NqT @ sp.diags(dp.c * dp.wq_c * points) @ dp.Nq
-            # (dp.hessian holds the points with g - w > 0: those near the edge
-            # are released in H and held in H_held)
-            H = H_held - bed(near & (depth > 0))
-            H_held = H + bed(near)
+            # (the points near the edge released in H, held in H_held)
+            H = dp.hessian(u, active=(depth > 0) & ~near)
+            H_held = dp.hessian(u, active=(depth > 0) | near)
     K = dp.K
     tol = eig_tol(len(dp.x) - 1)
 
