@@ -42,11 +42,11 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .equilibrium import Equilibrium
-from .probes import hessian_stability
+from .probes import HESSIAN_ELEMENTS, hessian_stability
 from .whole_beam import MAX_UNKNOWNS, same_beam
 from .zero_step import STEP_TOL
 
-__all__ = ["near_flat"]
+__all__ = ["near_flat", "unresolved"]
 
 log = logging.getLogger(__name__)
 
@@ -70,8 +70,9 @@ def near_flat(dp, modes, out, S, zero_floor, polish=None) -> list:
     ----------
     dp : DiscreteProblem
         The scene above P_bar_h, with a unilateral foundation or an obstacle, and
-        a load (else ``out`` is returned as it is), at most ``MAX_UNKNOWNS`` free
-        DOFs.
+        a load (else ``out`` is returned as it is); on a bed at most
+        :data:`.probes.HESSIAN_ELEMENTS` elements (the labels' reach), on an
+        obstacle at most ``MAX_UNKNOWNS`` free DOFs (the polish's).
     modes : Modes
         Its unstable modes: the starts' directions, and the amplitudes of an
         added entry (``(G phi)ᵀ u``).
@@ -99,7 +100,8 @@ def near_flat(dp, modes, out, S, zero_floor, polish=None) -> list:
     # (with an obstacle one mode only: two modes' second search in the flat beam's
     # own scale finds these, :func:`.zooms.own_scale`, and each polish is dense)
     obstacle = dp.contact == "obstacle" and polish is not None and modes.k == 1
-    if not (bed or obstacle) or zero_floor is None or not 0 < dp.n <= MAX_UNKNOWNS:
+    within = len(dp.x) - 1 <= HESSIAN_ELEMENTS if bed else dp.n <= MAX_UNKNOWNS
+    if not (bed or obstacle) or zero_floor is None or dp.n == 0 or not within:
         return out
     out = list(out)
     added = []
@@ -116,6 +118,25 @@ def near_flat(dp, modes, out, S, zero_floor, polish=None) -> list:
                  f" in place of {len(same)} listed, not optimal" if same else "")
         added.append(e)
     return out + added
+
+
+def unresolved(dp, modes, u, S) -> bool:
+    """Whether the beam of Hermite DOFs ``u`` lies where only the energy's Hessian
+    can label it: within ``NEAR`` S of s = 0 with a unilateral bed's edge within
+    that reach (``NEAR`` S along any unstable mode) of some quadrature point.
+
+    There the probes of the reduced function, 1e-6 S wide, cross the bed's edge
+    and may stand for another equilibrium: the P1 beam of the module's notes on
+    520 elements, beyond the Hessian's reach then, was listed unstable and
+    `optimal`, a strict minimum.  :func:`.stationary.equilibria` reports such an
+    entry `inaccurate` where :func:`.probes.hessian_stability` leaves it undecided.
+    """
+    if not (dp.contact == "foundation" and not dp.bilateral and dp.n):
+        return False
+    if not float(np.linalg.norm(modes.phi.T @ (dp.G @ u))) <= NEAR * S:
+        return False
+    reach = NEAR * S * float(np.max(np.abs(dp.Nq @ modes.phi)))
+    return bool(np.min(np.abs(dp.g - dp.Nq @ u)) <= reach)
 
 
 def _starts(dp, modes, held):

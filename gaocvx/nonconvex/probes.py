@@ -23,7 +23,8 @@ import numpy as np
 
 from .roundoff import LABEL_NOISE, NOISE, round_off
 
-__all__ = ["classify", "curvature", "least_rise", "probe_noise", "hessian_stability"]
+__all__ = ["classify", "curvature", "least_rise", "probe_noise", "hessian_stability",
+           "HESSIAN_ELEMENTS"]
 
 
 def classify(dF, r, h) -> tuple:
@@ -167,6 +168,17 @@ def probe_noise(dp, grad, s, h, n: int = 16) -> float:
     return noise
 
 
+#: Elements up to which :func:`hessian_stability` decides (beyond: None).  Its
+#: threshold :func:`.whole_beam.eig_tol` grows as N^4 with K's condition; the
+#: least ``mu`` of (H, K) at the three near-flat equilibria of the P1 beam on a
+#: bed at gap 0 (docs/nonconvex.md), by three ways (dense, Jacobi-scaled dense,
+#: shift-invert Lanczos; benchmarks/eig_tol_spread.py, docs/nonconvex.md), spreads
+#: over up to 1.5e-7 at 480 elements, 4.2e-6 at 1024 and 1.1e-4 at 2048, within
+#: eig_tol's 5.3e-7, 1.1e-5 and 1.8e-4 (the spread growing as N^4 too; not
+#: measured beyond).
+HESSIAN_ELEMENTS = 2048
+
+
 def hessian_stability(dp, u, margin: float = 1e-3):
     """A strict local minimum (True), not a minimum (False), or undecided (None),
     from the least eigenvalue ``mu`` of the energy's Hessian at the whole beam's
@@ -179,7 +191,7 @@ def hessian_stability(dp, u, margin: float = 1e-3):
     off within that step: listed unstable, a strict local minimum (the
     Hessian's eigenvalues 0.47-5.4 relative to K; a helper's campaign).
 
-    No obstacle, and up to :data:`.whole_beam.MAX_UNKNOWNS` DOFs, where eig_tol
+    No obstacle, and up to :data:`HESSIAN_ELEMENTS` elements, where eig_tol
     was measured (else None).  A unilateral foundation's points within ``margin``
     of the largest ``|g - w|`` and ``|w|`` of its edge (``g - w = 0``) may lie on
     either side of it at the equilibrium ``u`` stands for: the true energy lies
@@ -200,9 +212,9 @@ def hessian_stability(dp, u, margin: float = 1e-3):
     False
     """
     from ..linalg import BandedCholesky, NotPositiveDefinite
-    from .whole_beam import MAX_UNKNOWNS, eig_tol
+    from .whole_beam import eig_tol
 
-    if dp.contact == "obstacle" or not 0 < dp.n <= MAX_UNKNOWNS:
+    if dp.contact == "obstacle" or dp.n == 0 or len(dp.x) - 1 > HESSIAN_ELEMENTS:
         return None
     u = np.asarray(u, float)
     H = H_held = dp.hessian(u)

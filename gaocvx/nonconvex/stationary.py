@@ -54,7 +54,7 @@ from ..scene import check_solve_arguments, numbers_of, whole
 from .bounds import check_bounded, equilibrium_box, estimate_boxes, zoom_boxes
 from . import stationary1 as line
 from .equilibrium import Equilibrium, check_has_minimum, check_mountain_pass, same_point
-from .near_flat import near_flat
+from .near_flat import near_flat, unresolved
 from .images import complete_beams
 from .at_limit import flat_at_limit
 from .probes import classify as classify_zero, hessian_stability
@@ -335,6 +335,11 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                          "by the reduced function's probes", e.energy,
                          "stable" if verdict else "unstable")
                 e.stable = verdict
+            if verdict is None and e.status == "optimal" and unresolved(dp, modes, u, S):
+                log.warning("equilibria: the entry at %.4g J lies near the flat beam at the "
+                            "bed's edge, where the energy's Hessian leaves its stability "
+                            "undecided: inaccurate", e.energy)
+                e.status = "inaccurate"
         check_has_minimum(out)
         check_mountain_pass(out)
         return out
