@@ -385,6 +385,23 @@ def test_two_minima_without_an_unstable_equilibrium_between_them_are_inaccurate(
     assert "one within the merging distance of a listed one is missing" in caplog.text
 
 
+def test_with_one_mode_an_unstable_equilibrium_must_lie_between_two_minima(monkeypatch):
+    """With one mode the mountain pass lies between the two minima along the
+    mode's amplitude (the reduced function's maximum there is a zero of F').
+    The same scene with the flat beam labelled stable and the beam buckled up
+    unstable (two labels wrong): an unstable entry is listed, so the rule
+    counting them passed, but none lies between the flat beam and the one
+    buckled down."""
+    import gaocvx.nonconvex.stationary1 as st
+
+    scene = Scene.from_dict({**scene_dict("P1", elements=8), "load": {"axial": 7.0e9}})
+    monkeypatch.setattr(st, "classify", lambda dF, r, h: (r <= 0, 1.0 if r <= 0 else -1.0))
+    _no_whole_beam_stability(monkeypatch)
+    eqs = sorted(equilibria(scene), key=lambda e: e.amplitudes[0])
+    assert [e.stable for e in eqs] == [True, True, False]
+    assert all(e.status == "inaccurate" for e in eqs)
+
+
 def _no_whole_beam_stability(monkeypatch):
     # (the labels made wrong on purpose stay wrong: the whole beam's Hessian,
     # probes.hessian_stability, would mend them before the list's rules look)

@@ -113,7 +113,34 @@ def check_mountain_pass(eqs) -> None:
     on the safe side.  Unstable equilibria at a kink of F or an edge of the
     admissible amplitudes are not searched (:mod:`.stationary2`), so a list
     whose saddle lies there is ``inaccurate`` too.
+
+    With one unstable mode the rule is sharper: along the mode's amplitude s,
+    between two ``optimal`` stable entries an unstable one must lie.  The
+    reduced function F(s) (the energy's least value at amplitude s, one beam
+    each: the rest of the energy is strictly convex) is continuous, and F + c s^2
+    convex, so F has no concave kink: its maximum between two minima is a zero
+    of F', an equilibrium and not a minimum.  A list whose only saddle lies
+    elsewhere (a near-flat one added, :mod:`.near_flat`) no longer passes.
+
+    >>> from types import SimpleNamespace as E
+    >>> eqs = [E(amplitudes=[s], stable=st, status="optimal")
+    ...        for s, st in [(-1.0, True), (0.0, False), (1.0, True), (2.0, True)]]
+    >>> check_mountain_pass(eqs); [e.status for e in eqs]
+    ['inaccurate', 'inaccurate', 'inaccurate', 'inaccurate']
     """
+    if eqs and all(len(getattr(e, "amplitudes", ())) == 1 for e in eqs):
+        last = None      # (the last stable optimal entry since an unstable one)
+        for e in sorted(eqs, key=lambda e: float(e.amplitudes[0])):
+            if not e.stable:
+                last = None
+            elif e.status == "optimal":
+                if last is not None:
+                    _all_inaccurate(eqs, "two stable equilibria with no unstable one between "
+                                         "them along the mode, but an unstable equilibrium "
+                                         "lies between two minima (mountain pass)")
+                    return
+                last = e
+        return
     if sum(bool(e.stable) and e.status == "optimal" for e in eqs) < 2 \
             or any(not e.stable for e in eqs):
         return
