@@ -176,17 +176,19 @@ def _least_mu(en, x, shift):
     return sla.eigh(H, en.stiffness(), eigvals_only=True, subset_by_index=[0, 0])[0]
 
 
-def test_on_520_elements_the_pressed_beam_is_stable_and_its_lifted_twin_listed():
-    # Beyond 1000 DOFs neither near_flat nor the Hessian's label ran: the
-    # pressed beam was listed unstable and optimal, its lifted twin missing
-    scene = _scene("P1", 6.0e9, elements=520)
+def _checked_near_flat(scene, W):
+    """``(stable, listed stable, listed optimal)`` of each near-flat entry, stable
+    by the independent energy's Hessian; each entry an equilibrium (Newton's step
+    of the independent energy at most 1e-4 of its DOFs), and within 1e-6 where
+    it is `optimal`."""
     entries = _near_flat_entries(equilibria(scene))
-    en = Discrete(scene, W=1e-13)
+    en = Discrete(scene, W=W)
     found = []
     for e in entries:
         x = en.from_nodal(e.w, e.slope)
         _, g = en(x)
-        assert np.abs(np.linalg.solve(en.hessian(x), g)).max() <= 1e-6 * np.abs(x).max()
+        step = np.abs(np.linalg.solve(en.hessian(x), g)).max() / np.abs(x).max()
+        assert step <= (1e-6 if e.status == "optimal" else 1e-4), (e.status, step)
         # (points beside the clamped ends lie 1e-7 of the depth from the bed's
         # edge: the label must hold with them released and with them held)
         margin = 1e-3 * float(np.abs(np.asarray(en.gql - en._local(x)[5], float)).max())
@@ -195,8 +197,31 @@ def test_on_520_elements_the_pressed_beam_is_stable_and_its_lifted_twin_listed()
         else:
             assert _least_mu(en, x, margin) < 0
             stable = False
-        found.append((stable, e.stable, e.status))
-    assert sorted(found) == [(False, False, "optimal"), (True, True, "optimal")]
+        found.append((stable, e.stable, e.status == "optimal"))
+    return sorted(found)
+
+
+def test_on_520_elements_the_pressed_beam_is_stable_and_its_lifted_twin_listed():
+    # Beyond 1000 DOFs neither near_flat nor the Hessian's label ran: the
+    # pressed beam was listed unstable and optimal, its lifted twin missing.
+    # (The twin, from Newton's method on the Hermite gradient, is `inaccurate`
+    # here: that gradient's round-off may move it by more than 1e-6.)
+    found = _checked_near_flat(_scene("P1", 6.0e9, elements=520), W=1e-13)
+    assert [f[:2] for f in found] == [(False, False), (True, True)]
+    assert found[1][2]          # (the pressed beam `optimal`)
+
+
+@pytest.mark.slow
+def test_a_near_flat_entry_the_gradients_round_off_moves_is_not_optimal():
+    # A helper's campaign: P4 on 1423 elements, the beam pressed 3e-17 m into a
+    # bed at gap 0 was `optimal` (its Newton step 1e-7) where the independent
+    # energy's step measures 1.7e-5 of it
+    scene = Scene.from_dict({"beam": {**BEAM, "supports": "P4"},
+                             "load": {"q": -1.2332225307596478e-06, "axial": 3307089170.349617},
+                             "mesh": {"elements": 1423},
+                             "foundation": {"gap": 0.0, "stiffness": 79406904823.0671}})
+    found = _checked_near_flat(scene, W=1e-17)
+    assert [f[:2] for f in found] == [(False, False), (True, True)]
 
 
 def test_beyond_the_hessians_reach_a_near_flat_entry_at_the_beds_edge_is_inaccurate(
