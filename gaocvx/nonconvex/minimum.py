@@ -113,6 +113,9 @@ BASINS = True
 # bounds too loose to close boxes (P1 with two modes: 4.4e-8 below the minimum at
 # 1024 elements, against a tolerance of 5e-9), and their slopes' bounds cost O(N^2).
 BASIN_ELEMENTS = 1024
+# With an obstacle, the energy scale's floor and the search's units from the
+# linear beam on the obstacle (linear_on_obstacle) instead of the unsupported one.
+OBSTACLE_UNITS = True
 
 
 def one_mode_amplitude(dp, modes) -> float:
@@ -133,6 +136,86 @@ def scene_energy(dp, modes) -> float:
     """
     A = one_mode_amplitude(dp, modes)
     return load_constant(dp) + 0.5 * float(modes.c[0]) * A * A
+
+
+def linear_on_obstacle(dp) -> tuple[float, float]:
+    """The linear beam on the obstacle: ``(c0, size)`` in the units of ``dp``.
+
+    ``c0 = -min 1/2 u'K u - f'u`` over the obstacle's rows (``A u >= levels``, a
+    channel's too; a convex QP, Clarabel), at least 0 (``w = 0`` is admissible),
+    and ``size`` the largest nodal ``|w|`` of its answer.  Where the obstacle
+    absorbs the load (a point force pressing the beam onto it), ``c0`` is far
+    below :func:`.bounds.load_constant`'s, the unsupported beam's: the energy
+    of anything the beam can do on the obstacle is measured against this one.
+    ``c0`` is the smaller of minus the primal value and minus the dual one
+    (``-1/2 r'K^-1 r + lambda' levels``, ``r = f + A' lambda``, ``lambda >= 0``:
+    a bound of the minimum from below, so its negative lies above ``c0``): an
+    overestimated ``c0`` would loosen the certificate.  None where the QP is not
+    solved (the caller keeps the unsupported beam's).
+    """
+    import cvxpy as cp
+
+    from .node import obstacle_rows
+
+    if dp.n == 0 or not np.any(dp.f):
+        return 0.0, 0.0
+    A, levels = obstacle_rows(dp)
+    u = cp.Variable(dp.n)
+    con = [A @ u >= levels]
+    prob = cp.Problem(cp.Minimize(0.5 * cp.quad_form(u, dp.K, assume_PSD=True) - dp.f @ u), con)
+    try:
+        prob.solve(solver=cp.CLARABEL, tol_gap_abs=1e-12, tol_gap_rel=1e-12, tol_feas=1e-12,
+                   max_iter=400)
+    except cp.error.SolverError:
+        return None
+    if prob.status != "optimal" or u.value is None or con[0].dual_value is None:
+        return None
+    x = np.asarray(u.value, float)
+    lam = np.maximum(np.asarray(con[0].dual_value, float), 0.0)
+    r = dp.f + A.T @ lam
+    dual = -0.5 * float(r @ dp._K_chol.solve(r)) + float(lam @ levels)
+    primal = 0.5 * float(x @ (dp.K @ x)) - float(dp.f @ x)
+    c0 = max(0.0, min(-primal, -dual))
+    size = float(np.max(np.abs(dp.full(x)[0::2]), initial=0.0))
+    log.info("global: the linear beam on the obstacle: c0 %.3g (unsupported %.3g), size %.3g W",
+             c0, load_constant(dp), size)
+    return c0, size
+
+
+def obstacle_energy(dp, modes) -> float | None:
+    """:func:`scene_energy` with the linear beam on the obstacle (None without one)."""
+    if dp.contact != "obstacle":
+        return None
+    lin = linear_on_obstacle(dp)
+    if lin is None:
+        return None
+    A = one_mode_amplitude(dp, modes)
+    return lin[0] + 0.5 * float(modes.c[0]) * A * A
+
+
+def global_units(dp, modes):
+    """:func:`rescale_for`, with an obstacle in the size of the beam on it.
+
+    The larger of the linear beam on the obstacle and the one-mode buckled
+    amplitude, where either more than ten times larger or smaller than ``W``
+    (the unsupported linear answer, which an obstacle absorbing an enormous
+    point force makes 1e4 times the buckled beam: the node programs, their
+    tolerances absolute in those units, then cannot resolve it).
+    """
+    if dp.contact != "obstacle" or not OBSTACLE_UNITS:
+        return rescale_for(dp, modes)
+    lin = linear_on_obstacle(dp)
+    if lin is None:
+        return rescale_for(dp, modes)
+    A = one_mode_amplitude(dp, modes)
+    size = max(lin[1], A * float(np.max(np.abs(modes.phi[dp._w_rows(), 0]), initial=0.0)))
+    if dp.g_above is not None:
+        wall = max(float(np.max(np.abs(dp.g))), float(dp.g_above))
+        if 0.0 < wall < 0.1 * max(size, 1.0):
+            return dp.rescaled(dp.W * wall)
+    if math.isfinite(size) and (size > 1.0 or 0.0 < size < 0.1):
+        return dp.rescaled(dp.W * size)
+    return dp
 
 
 def rescale_for(dp, modes):
@@ -250,7 +333,7 @@ def solve_global(dp, modes=None, max_nodes: int | None = None,
         raise SceneError("mesh.elements", f"the global method's dense node programs take at most "
                          f"{MAX_ELEMENTS} elements (beyond, the fast path: up to {MAX_MODES} "
                          "unstable modes)", n_el)
-    dp = rescale_for(dp, modes)
+    dp = global_units(dp, modes)
     prior = None
     # Without load, at least W: the certificate's floor (MixedForm.zero_floor) is
     # 1 there, and a P2 beam 2.6e-6 above the limit buckled to 0.18 W accepted a
@@ -389,7 +472,8 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None, stalled=None):
     # those of (K + c M, G), whose lambda_1 is no bound of it: none is used then.
     lam1 = 0.0 if getattr(dp, "bilateral", False) else float(modes.lam[0]) * (1.0 - 1e-9)
     lo, hi = amplitude_box(dp, k, upper=start[0], lam1=lam1)
-    floor = ENERGY_FLOOR * scene_energy(dp, modes)
+    on = obstacle_energy(dp, modes) if OBSTACLE_UNITS else None
+    floor = ENERGY_FLOOR * (scene_energy(dp, modes) if on is None else on)
     scale = max(dp.energy_size(start[1]), floor, 1e-300)
     # The dual bound first (no obstacle): where it holds, no branch and bound is needed.
     # (taken within a tenth of GAP_TOL: its gap is the round-off of the residual,
