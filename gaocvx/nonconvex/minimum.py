@@ -48,6 +48,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+import warnings
 
 import numpy as np
 
@@ -169,8 +170,11 @@ def linear_on_obstacle(dp) -> tuple[float, float]:
         # (the node programs' ladder: a beam pressed flat at gap 0 in a channel is
         # degenerate, and Clarabel fails at 1e-12)
         try:
-            prob.solve(solver=cp.CLARABEL, tol_gap_abs=tol, tol_gap_rel=tol, tol_feas=tol,
-                       max_iter=400)
+            with warnings.catch_warnings():
+                # "Solution may be inaccurate": the status says so, and is used.
+                warnings.simplefilter("ignore", UserWarning)
+                prob.solve(solver=cp.CLARABEL, tol_gap_abs=tol, tol_gap_rel=tol, tol_feas=tol,
+                           max_iter=400)
         except cp.error.SolverError:
             continue
         if prob.status in ("optimal", "optimal_inaccurate"):
@@ -501,8 +505,10 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None, stalled=None, on_obst
     lo, hi = amplitude_box(dp, k, upper=start[0], lam1=lam1)
     # (with an obstacle, the energy of the linear beam on it: checked against the gap
     # below; the floor itself where the search runs in its units)
-    obstacle_floor = (ENERGY_FLOOR * obstacle_energy(dp, modes)
+    obstacle_floor = (obstacle_energy(dp, modes)
                       if OBSTACLE_UNITS and dp.contact == "obstacle" else None)
+    if obstacle_floor is not None:
+        obstacle_floor *= ENERGY_FLOOR
     floor = ENERGY_FLOOR * scene_energy(dp, modes)
     if on_obstacle and obstacle_floor is not None:
         floor = obstacle_floor
