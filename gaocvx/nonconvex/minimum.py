@@ -357,8 +357,12 @@ def solve_global(dp, modes=None, max_nodes: int | None = None,
     again = _solve_in(global_units(dp, modes), modes, max_nodes, t0, fast, True, True)
     if again[1]["status"] == "optimal":
         return again
-    # (neither certified: the smaller gap)
-    return again if again[2]["bound_gap"] < first[2]["bound_gap"] else first
+    # Neither certified: the lower answer (its energy, lower_bound + bound_gap [J]), the
+    # first where equal or not comparable.  (Not the smaller gap: in the obstacle's units
+    # the node programs can end with bounds above an admissible energy -- a P1 beam under
+    # 6.04e12 N, a negative gap -- where the first search's answer stands.)
+    e1, e2 = (o[2]["lower_bound"] + o[2]["bound_gap"] for o in (first, again))
+    return again if math.isfinite(e2) and (not math.isfinite(e1) or e2 < e1) else first
 
 
 def _solve_in(dp, modes, max_nodes, t0, fast, give_up, on_obstacle) -> tuple:
