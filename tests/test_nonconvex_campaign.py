@@ -560,3 +560,41 @@ def test_a_first_search_given_up_runs_again_where_the_other_fails_too(monkeypatc
 
     monkeypatch.setattr(minimum, "solve_global", certified_second)
     assert minimum.solve_certified(dp, modes)[2] == {"call": 2} and len(calls) == 2
+
+
+# A campaign's scene (global minima, extreme loads on an obstacle): P4 at gap 0 under
+# a point force of 6.04e12 N, which the obstacle absorbs (1 mm by 1e6 m section).
+_ABSORBED = {
+    "beam": {"model": "gao", "supports": "P4", "length": 1.0, "E": 2.1e11, "nu": 0.3,
+             "half_thickness": 0.001, "width": 999999.9999999999},
+    "load": {"points": [[0.20604621722478078, -6043844830610.414]],
+             "axial": 5287475799.418158},
+    "mesh": {"elements": 8},
+    "obstacle": {"gap": 0.0}}
+
+
+@pytest.mark.slow
+def test_a_force_the_obstacle_absorbs_does_not_hide_the_buckled_minimum():
+    """It was answered flat, 0 J, `optimal` and unique, its gap 8127 J certified
+    against the unsupported beam's energy (1e15 J), where a buckled minimum lies
+    at -1891 J.  The reference is an exact rescaling: h x100, width x1e-6 and the
+    force x100 scale every energy by 1e4 (answered buckled before too); each
+    answer's energy is the independent energy's at its deflection."""
+    from nonconvex_independent import Discrete
+
+    scaled = {**_ABSORBED,
+              "beam": {**_ABSORBED["beam"], "half_thickness": 0.1, "width": 1.0},
+              "load": {**_ABSORBED["load"], "points": [[0.20604621722478078,
+                                                        -604384483061041.4]]}}
+    answers = []
+    for data in (_ABSORBED, scaled):
+        scene = Scene.from_dict(data)
+        r = solve(scene, "global")
+        assert r.status == "optimal", r.message
+        en = Discrete(scene, W=1e-3)
+        assert en.energy(en.from_nodal(r.w, r.slope)) == pytest.approx(r.energy, rel=1e-8)
+        assert np.min(r.w) >= -1e-9 * np.max(np.abs(r.w))     # (on the obstacle)
+        answers.append((r.energy, r.extra["global"]["bound_gap"]))
+    (e, gap), (e_big, gap_big) = answers
+    assert abs(e - 1e-4 * e_big) <= gap + 1e-4 * gap_big + 1e-9 * abs(e)
+    assert e < -1000.0          # (not the flat beam)

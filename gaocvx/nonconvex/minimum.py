@@ -48,7 +48,6 @@ from __future__ import annotations
 import logging
 import math
 import time
-import warnings
 
 import numpy as np
 
@@ -62,6 +61,7 @@ from .bnb import branch_and_bound
 from .bounds import amplitude_box, check_bounded, load_constant, mode_amplitudes
 from .modes import unstable_modes
 from .node import NodeProgram
+from .obstacle_scale import linear_on_obstacle, obstacle_energy
 from .polish import (answer_certificate, feasible_energy, flat_answer, polish, search_best,
                      to_mixed)
 
@@ -139,70 +139,6 @@ def scene_energy(dp, modes) -> float:
     """
     A = one_mode_amplitude(dp, modes)
     return load_constant(dp) + 0.5 * float(modes.c[0]) * A * A
-
-
-def linear_on_obstacle(dp) -> tuple[float, float]:
-    """The linear beam on the obstacle: ``(c0, size)`` in the units of ``dp``.
-
-    ``c0 = -min 1/2 u'K u - f'u`` over the obstacle's rows (``A u >= levels``, a
-    channel's too; a convex QP, Clarabel), at least 0 (``w = 0`` is admissible),
-    and ``size`` the largest nodal ``|w|`` of its answer.  Where the obstacle
-    absorbs the load (a point force pressing the beam onto it), ``c0`` is far
-    below :func:`.bounds.load_constant`'s, the unsupported beam's: the energy
-    of anything the beam can do on the obstacle is measured against this one.
-    ``c0`` is the smaller of minus the primal value and minus the dual one
-    (``-1/2 r'K^-1 r + lambda' levels``, ``r = f + A' lambda``, ``lambda >= 0``:
-    a bound of the minimum from below, so its negative lies above ``c0``): an
-    overestimated ``c0`` would loosen the certificate.  None where the QP is not
-    solved (the caller keeps the unsupported beam's).
-    """
-    import cvxpy as cp
-
-    from .node import obstacle_rows
-
-    if dp.n == 0 or not np.any(dp.f):
-        return 0.0, 0.0
-    A, levels = obstacle_rows(dp)
-    u = cp.Variable(dp.n)
-    con = [A @ u >= levels]
-    prob = cp.Problem(cp.Minimize(0.5 * cp.quad_form(u, dp.K, assume_PSD=True) - dp.f @ u), con)
-    for tol in (1e-12, 1e-10, 1e-8):
-        # (the node programs' ladder: a beam pressed flat at gap 0 in a channel is
-        # degenerate, and Clarabel fails at 1e-12)
-        try:
-            with warnings.catch_warnings():
-                # "Solution may be inaccurate": the status says so, and is used.
-                warnings.simplefilter("ignore", UserWarning)
-                prob.solve(solver=cp.CLARABEL, tol_gap_abs=tol, tol_gap_rel=tol, tol_feas=tol,
-                           max_iter=400)
-        except cp.error.SolverError:
-            continue
-        if prob.status in ("optimal", "optimal_inaccurate"):
-            break
-    if (prob.status not in ("optimal", "optimal_inaccurate") or u.value is None
-            or con[0].dual_value is None):
-        return None
-    x = np.asarray(u.value, float)
-    lam = np.maximum(np.asarray(con[0].dual_value, float), 0.0)
-    r = dp.f + A.T @ lam
-    dual = -0.5 * float(r @ dp._K_chol.solve(r)) + float(lam @ levels)
-    primal = 0.5 * float(x @ (dp.K @ x)) - float(dp.f @ x)
-    c0 = max(0.0, min(-primal, -dual))
-    size = float(np.max(np.abs(dp.full(x)[0::2]), initial=0.0))
-    log.info("global: the linear beam on the obstacle: c0 %.3g (unsupported %.3g), size %.3g W",
-             c0, load_constant(dp), size)
-    return c0, size
-
-
-def obstacle_energy(dp, modes) -> float | None:
-    """:func:`scene_energy` with the linear beam on the obstacle (None without one)."""
-    if dp.contact != "obstacle":
-        return None
-    lin = linear_on_obstacle(dp)
-    if lin is None:
-        return None
-    A = one_mode_amplitude(dp, modes)
-    return lin[0] + 0.5 * float(modes.c[0]) * A * A
 
 
 def global_units(dp, modes):
