@@ -155,15 +155,7 @@ def global_units(dp, modes):
     lin = linear_on_obstacle(dp)
     if lin is None:
         return rescale_for(dp, modes)
-    A = one_mode_amplitude(dp, modes)
-    size = max(lin[1], A * float(np.max(np.abs(modes.phi[dp._w_rows(), 0]), initial=0.0)))
-    if dp.g_above is not None:
-        wall = max(float(np.max(np.abs(dp.g))), float(dp.g_above))
-        if 0.0 < wall < 0.1 * max(size, 1.0):
-            return dp.rescaled(dp.W * wall)
-    if math.isfinite(size) and (size > 1.0 or 0.0 < size < 0.1):
-        return dp.rescaled(dp.W * size)
-    return dp
+    return _in_size(dp, max(lin[1], _buckled_size(dp, modes)), shrink=True)
 
 
 def rescale_for(dp, modes):
@@ -177,13 +169,26 @@ def rescale_for(dp, modes):
     those units, stalled at a gap of 0.077 of it for their 120 s, then certified
     in 1.4 s in the answer's own scale).
     """
+    return _in_size(dp, _buckled_size(dp, modes))
+
+
+def _buckled_size(dp, modes) -> float:
+    """The largest nodal ``|w|`` of the first mode at the one-mode amplitude [W]."""
     A = one_mode_amplitude(dp, modes)
-    size = A * float(np.max(np.abs(modes.phi[dp._w_rows(), 0]), initial=0.0))
+    return A * float(np.max(np.abs(modes.phi[dp._w_rows(), 0]), initial=0.0))
+
+
+def _in_size(dp, size, shrink=False):
+    """``dp`` in units of ``size`` [W] where larger (and with ``shrink`` more than
+    ten times smaller); in a channel ten times narrower than that, of its wider
+    surface's distance."""
     if dp.contact == "obstacle" and dp.g_above is not None:
         wall = max(float(np.max(np.abs(dp.g))), float(dp.g_above))
         if 0.0 < wall < 0.1 * max(size, 1.0):
             return dp.rescaled(dp.W * wall)
-    return dp.rescaled(dp.W * size) if size > 1.0 else dp
+    if math.isfinite(size) and (size > 1.0 or (shrink and 0.0 < size < 0.1)):
+        return dp.rescaled(dp.W * size)
+    return dp
 
 
 def time_limit(dp, k: int = 1) -> float:
