@@ -17,8 +17,9 @@ between it and the buckled beam, was missing the same way (one mode: the list
 
 Here Newton's method on the whole beam starts from the linear answers (with
 every bed point held, and with every one released), and from those moved along
-each unstable mode.  On a bed it is semismooth Newton on the gradient (the
-bed's Hessian on the points it holds); an end whose last step moves its
+each unstable mode.  On a bed it is semismooth Newton on the gradient (in
+extended precision, :func:`.basin._residual`; the bed's Hessian on the points
+it holds); an end whose last step moves its
 DOFs (deflections, and slopes times L) by at most ``STEP_TOL`` of their largest
 (at least the zero floor), and whose stability the Hessian decides
 (:func:`.probes.hessian_stability`), is an equilibrium certified in its own
@@ -41,6 +42,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .basin import _residual
 from .equilibrium import Equilibrium
 from .probes import HESSIAN_ELEMENTS, hessian_stability
 from .whole_beam import MAX_UNKNOWNS, same_beam
@@ -60,8 +62,8 @@ MOVES = (-4.0, -1.0, -0.25, 0.25, 1.0, 4.0)
 #: Ends farther from s = 0 than this times S are left to the searches.
 NEAR = 1e-4
 #: An end is `optimal` only where this times the gradient's round-off moves its DOFs
-#: by at most ``STEP_TOL`` of their size (:func:`_round_off_step`: within a factor
-#: 4 to 10 of the independent energy's step where it was measured).
+#: by at most ``STEP_TOL`` of their size (:func:`_round_off_step`: 1e-14 of them,
+#: as the independent energy's step, on 520 to 2048 elements where it was measured).
 NOISE_MARGIN = 10.0
 #: Beams within this (:func:`.whole_beam.same_beam`) of a listed one are that one.
 SAME = 1e-4
@@ -196,27 +198,49 @@ def _bed_end(dp, modes, u, zero_floor):
 
 
 def _round_off_step(dp, u, draws: int = 2) -> float:
-    """The largest DOF Newton's step moves ``u`` by for the gradient's round-off:
-    ``eps`` times the size of its terms (bending, axial, load, bed), of random
-    signs, solved with the Hessian (the largest of ``draws`` draws).
+    """The largest DOF Newton's step moves ``u`` by for the rounding of
+    :func:`.basin._residual`'s extended-precision gradient (the largest of
+    ``draws`` draws of random signs, solved with the Hessian).
 
-    The step measured at the end cannot see it: the float64 gradient's zero
-    lies that far from the exact data's.  (A helper's campaign: P4 on 1423
-    elements, bed at gap 0, q = -1.2e-6 N/m, the pressed beam 3e-17 m deep
-    converged to a step of 1e-7 where the independent energy's long-double
-    step measures 1.7e-5 of it; this estimate 2e-6 to 4.5e-6.)
+    The step measured at the end cannot see it: the computed gradient's zero
+    lies that far from the exact data's.  The rounding is drawn where it is
+    made: in the curvatures and slopes at the quadrature points (``eps`` times
+    their terms' size, as the energy sums them), then carried to the DOFs by
+    the energy's own transposes, and in the sums at the DOFs (``eps`` times the
+    size of their terms, and the gradient's own in double).  Drawn at the DOFs alone, it overstated the step by
+    seven orders on fine meshes: the curvatures' rounding reaches the gradient
+    differentiated twice, with little of the low modes H⁻¹ magnifies.  (A
+    helper's campaign: P4 on 1423 elements, bed at gap 0, q = -1.2e-6 N/m, the
+    pressed beam 3e-17 m deep converged on the float64 gradient to a step of
+    1e-7 where the independent energy's long-double step measures 1.7e-5 of
+    it; Newton's method here takes the long-double gradient.)
     """
+    eps = float(np.finfo(np.longdouble).eps)
     au = np.abs(u)
-    terms = abs(dp.K) @ au + np.abs(dp.f)
-    if dp.p:
-        terms = terms + abs(dp.p) * (abs(dp.G) @ au)
+    kappa, y = np.abs(dp.B2 @ u), np.abs(dp.B1 @ u)
+    dk, dy = abs(dp.B2) @ au, abs(dp.B1) @ au
+    # (and its conversion to double: one rounding of the gradient itself)
+    sums = (abs(dp.B2.T) @ (dp.wq2 * kappa) + np.abs(dp.f)
+            + np.finfo(float).eps / eps * np.abs(_residual(dp, u)[0]))
+    if dp.p or dp.a:
+        sums = sums + abs(dp.B1T) @ (dp.wq_gao * y * (dp.a / 3.0 * y * y + abs(dp.p)))
     if dp.contact == "foundation":
-        terms = terms + abs(dp.NqT) @ (dp.c * dp.wq_c * (np.abs(dp.g) + abs(dp.Nq) @ au))
+        pen = dp.c * dp.wq_c * (np.abs(dp.g) + abs(dp.Nq) @ au)
+        sums = sums + abs(dp.NqT) @ pen
     H = dp.hessian(u)
     rng = np.random.default_rng(0)
+
+    def sign(v):
+        return v * rng.choice([-1.0, 1.0], size=v.size)
+
     worst = 0.0
     for _ in range(draws):
-        du = _solve(H, np.finfo(float).eps * terms * rng.choice([-1.0, 1.0], size=terms.size))
+        r = dp.B2.T @ (dp.wq2 * sign(dk)) + sign(sums)
+        if dp.p or dp.a:
+            r = r + dp.B1T @ (dp.wq_gao * sign(dy) * (dp.a * y * y + abs(dp.p)))
+        if dp.contact == "foundation":
+            r = r + dp.NqT @ sign(pen)
+        du = _solve(H, eps * r)
         worst = max(worst, math.inf if du is None else float(np.max(np.abs(du))))
     return worst
 
@@ -227,7 +251,7 @@ def _newton(dp, u, zero_floor):
     floor); None where it does not come within ``STEP_TOL``."""
     last = None
     for _ in range(MAX_STEPS):
-        du = _solve(dp.hessian(u), -dp.gradient(u))
+        du = _solve(dp.hessian(u), -_residual(dp, u)[0])
         if du is None:
             break
         # (in all DOFs, deflections and slopes L / W alike: measured on the
