@@ -114,10 +114,8 @@ BASINS = True
 # bounds too loose to close boxes (P1 with two modes: 4.4e-8 below the minimum at
 # 1024 elements, against a tolerance of 5e-9), and their slopes' bounds cost O(N^2).
 BASIN_ELEMENTS = 1024
-# With an obstacle, the energy scale's floor and the search's units from the
-# linear beam on the obstacle (linear_on_obstacle) instead of the unsupported one.
-OBSTACLE_UNITS = True
-# The gap's largest fraction of that energy (see _run).
+# With an obstacle, the gap's largest fraction of the energy of the beam on it
+# (the linear beam on the obstacle's and the buckled one's; see _run).
 RESOLVE = 1e-3
 
 
@@ -141,8 +139,9 @@ def scene_energy(dp, modes) -> float:
     return load_constant(dp) + 0.5 * float(modes.c[0]) * A * A
 
 
-def global_units(dp, modes):
-    """:func:`rescale_for`, with an obstacle in the size of the beam on it.
+def global_units(dp, modes, linear):
+    """:func:`rescale_for`, with an obstacle in the size of the beam on it
+    (``linear``: :func:`.obstacle_scale.linear_on_obstacle`'s, None without).
 
     The larger of the linear beam on the obstacle and the one-mode buckled
     amplitude, where either more than ten times larger or smaller than ``W``
@@ -150,12 +149,9 @@ def global_units(dp, modes):
     point force makes 1e4 times the buckled beam: the node programs, their
     tolerances absolute in those units, then cannot resolve it).
     """
-    if dp.contact != "obstacle" or not OBSTACLE_UNITS:
+    if linear is None:
         return rescale_for(dp, modes)
-    lin = linear_on_obstacle(dp)
-    if lin is None:
-        return rescale_for(dp, modes)
-    return _in_size(dp, max(lin[1], _buckled_size(dp, modes)), shrink=True)
+    return _in_size(dp, max(linear[1] / dp.W, _buckled_size(dp, modes)), shrink=True)
 
 
 def rescale_for(dp, modes):
@@ -286,7 +282,9 @@ def solve_global(dp, modes=None, max_nodes: int | None = None,
         raise SceneError("mesh.elements", f"the global method's dense node programs take at most "
                          f"{MAX_ELEMENTS} elements (beyond, the fast path: up to {MAX_MODES} "
                          "unstable modes)", n_el)
-    first = _solve_in(rescale_for(dp, modes), modes, max_nodes, t0, fast, give_up, False)
+    # (the linear beam on the obstacle: the floor of its energy scale, solved once)
+    linear = linear_on_obstacle(dp) if dp.contact == "obstacle" else None
+    first = _solve_in(rescale_for(dp, modes), modes, max_nodes, t0, fast, give_up, linear, False)
     if not first[1].get("unresolved"):
         return first
     # Certified in the unsupported beam's energy, but the gap does not resolve the
@@ -295,7 +293,8 @@ def solve_global(dp, modes=None, max_nodes: int | None = None,
     # against that energy.  (A P4 beam at gap 0 under a point force of 6.04e12 N: flat,
     # gap 8127 J against a buckled minimum at -1891 J; again, buckled, gap 5.4e-6 J.)
     log.info("global: the gap does not resolve the beam on the obstacle; again in its units")
-    again = _solve_in(global_units(dp, modes), modes, max_nodes, t0, fast, True, True)
+    again = _solve_in(global_units(dp, modes, linear), modes, max_nodes, t0, fast, True, linear,
+                      True)
     if again[1]["status"] == "optimal":
         return again
     # Neither certified: the lower answer (its energy, lower_bound + bound_gap [J]), the
@@ -306,10 +305,11 @@ def solve_global(dp, modes=None, max_nodes: int | None = None,
     return again if math.isfinite(e2) and (not math.isfinite(e1) or e2 < e1) else first
 
 
-def _solve_in(dp, modes, max_nodes, t0, fast, give_up, on_obstacle) -> tuple:
+def _solve_in(dp, modes, max_nodes, t0, fast, give_up, linear, on_obstacle) -> tuple:
     """:func:`solve_global` in the units of ``dp`` (re-solved once in the answer's own
-    scale where it lies outside them); ``on_obstacle``: the energy scale's floor from
-    the linear beam on the obstacle (:func:`obstacle_energy`)."""
+    scale where it lies outside them); ``linear``: the linear beam on the obstacle
+    (:func:`.obstacle_scale.linear_on_obstacle`), whose energy (:func:`obstacle_energy`)
+    the gap must resolve, and with ``on_obstacle`` the energy scale's floor."""
     prior = None
     # Without load, at least W: the certificate's floor (MixedForm.zero_floor) is
     # 1 there, and a P2 beam 2.6e-6 above the limit buckled to 0.18 W accepted a
@@ -333,7 +333,8 @@ def _solve_in(dp, modes, max_nodes, t0, fast, give_up, on_obstacle) -> tuple:
 
     for attempt in range(2):
         raw, info, size, out = _run(dp, modes, max_nodes, t0, fast, prior,
-                                    stalled=None if attempt else stop, on_obstacle=on_obstacle)
+                                    stalled=None if attempt else stop, linear=linear,
+                                    on_obstacle=on_obstacle)
         in_scale = in_units(size)
         if attempt or (in_scale and (give_up or not out.stalled)):
             break
@@ -419,7 +420,8 @@ def _amplitudes(dp, modes, u) -> list:
     return [float(x) for x in np.asarray(dp.G @ modes.phi).T @ np.asarray(u, float)]
 
 
-def _run(dp, modes, max_nodes, t0, fast=False, prior=None, stalled=None, on_obstacle=False):
+def _run(dp, modes, max_nodes, t0, fast=False, prior=None, stalled=None, linear=None,
+         on_obstacle=False):
     k = modes.k
     if fast and dp.contact == "obstacle":
         from .fast_contact import FastContactProgram
@@ -450,8 +452,7 @@ def _run(dp, modes, max_nodes, t0, fast=False, prior=None, stalled=None, on_obst
     lo, hi = amplitude_box(dp, k, upper=start[0], lam1=lam1)
     # (with an obstacle, the energy of the linear beam on it: checked against the gap
     # below; the floor itself where the search runs in its units)
-    obstacle_floor = (obstacle_energy(dp, modes)
-                      if OBSTACLE_UNITS and dp.contact == "obstacle" else None)
+    obstacle_floor = obstacle_energy(dp, modes, linear)
     if obstacle_floor is not None:
         obstacle_floor *= ENERGY_FLOOR
     floor = ENERGY_FLOOR * scene_energy(dp, modes)

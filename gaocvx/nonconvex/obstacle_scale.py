@@ -25,8 +25,9 @@ __all__ = ["linear_on_obstacle", "obstacle_energy"]
 log = logging.getLogger(__name__)
 
 
-def linear_on_obstacle(dp) -> tuple[float, float]:
-    """The linear beam on the obstacle: ``(c0, size)`` in the units of ``dp``.
+def linear_on_obstacle(dp) -> tuple[float, float] | None:
+    """The linear beam on the obstacle: ``(c0, size)``, in J and m (the same in
+    any units of the scene; solved once, in those of ``dp``).
 
     ``c0 = -min 1/2 u'K u - f'u`` over the obstacle's rows (``A u >= levels``, a
     channel's too; a convex QP, Clarabel), at least 0 (``w = 0`` is admissible),
@@ -75,16 +76,13 @@ def linear_on_obstacle(dp) -> tuple[float, float]:
     size = float(np.max(np.abs(dp.full(x)[0::2]), initial=0.0))
     log.info("global: the linear beam on the obstacle: c0 %.3g (unsupported %.3g), size %.3g W",
              c0, load_constant(dp), size)
-    return c0, size
+    return c0 * dp.E0, size * dp.W
 
 
-def obstacle_energy(dp, modes) -> float | None:
-    """:func:`.minimum.scene_energy` with the linear beam on the obstacle (None
-    without one, or where its QP is not solved)."""
-    if dp.contact != "obstacle":
-        return None
-    lin = linear_on_obstacle(dp)
-    if lin is None:
+def obstacle_energy(dp, modes, linear) -> float | None:
+    """:func:`.minimum.scene_energy` with the linear beam on the obstacle, in the
+    units of ``dp``: ``linear`` is :func:`linear_on_obstacle`'s (None: None)."""
+    if linear is None:
         return None
     A = float(mode_amplitudes(dp, modes, 1)[0])
-    return lin[0] + 0.5 * float(modes.c[0]) * A * A
+    return linear[0] / dp.E0 + 0.5 * float(modes.c[0]) * A * A
