@@ -619,3 +619,20 @@ def test_a_force_the_obstacle_absorbs_does_not_hide_the_buckled_minimum(monkeypa
     (e, gap), (e_big, gap_big) = answers
     assert abs(e - 1e-4 * e_big) <= gap + 1e-4 * gap_big + 1e-9 * abs(e)
     assert e < -1000.0          # (not the flat beam)
+
+
+@pytest.mark.slow
+def test_where_the_obstacles_qp_fails_its_floor_is_zero_not_the_unsupported_beams(monkeypatch):
+    """Clarabel fails the linear beam's QP on some fine meshes; the gap's test then
+    fell back to the unsupported beam's floor, and the scene above was again flat,
+    0 J, `optimal`.  With c0 = 0 (w = 0 is admissible: a floor from below) the
+    buckled minimum of the test above is found and certified."""
+    from nonconvex_independent import Discrete
+
+    monkeypatch.setattr(minimum, "linear_on_obstacle", lambda dp: None)
+    scene = Scene.from_dict(_ABSORBED)
+    r = solve(scene, "global")
+    assert r.status == "optimal", r.message
+    assert r.energy < -1000.0          # (not the flat beam)
+    en = Discrete(scene, W=1e-3)
+    assert en.energy(en.from_nodal(r.w, r.slope)) == pytest.approx(r.energy, rel=1e-8)

@@ -282,8 +282,11 @@ def solve_global(dp, modes=None, max_nodes: int | None = None,
         raise SceneError("mesh.elements", f"the global method's dense node programs take at most "
                          f"{MAX_ELEMENTS} elements (beyond, the fast path: up to {MAX_MODES} "
                          "unstable modes)", n_el)
-    # (the linear beam on the obstacle: the floor of its energy scale, solved once)
-    linear = linear_on_obstacle(dp) if dp.contact == "obstacle" else None
+    # (the linear beam on the obstacle: the floor of its energy scale, solved once;
+    # where its QP fails, c0 = 0 and no size: w = 0 is admissible, so c0 >= 0, and a
+    # floor too low only makes the gap's test stricter -- without it, the unsupported
+    # beam's floor alone certified the flat beam under an absorbed force)
+    linear = (linear_on_obstacle(dp) or (0.0, 0.0)) if dp.contact == "obstacle" else None
     first = _solve_in(rescale_for(dp, modes), modes, max_nodes, t0, fast, give_up, linear, False)
     if not first[1].get("unresolved"):
         return first

@@ -39,7 +39,8 @@ def linear_on_obstacle(dp) -> tuple[float, float] | None:
     (``-1/2 r'K^-1 r + lambda' levels``, ``r = f + A' lambda``, ``lambda >= 0``:
     a bound of the minimum from below, so its negative lies above ``c0``): an
     overestimated ``c0`` would loosen the certificate.  None where the QP is not
-    solved (the caller keeps the unsupported beam's).
+    solved (:func:`.minimum.solve_global` then takes ``c0 = 0``, which ``w = 0``
+    bounds from below, and no size).
     """
     import cvxpy as cp
 
