@@ -426,7 +426,7 @@ class FastContactProgram(FastProgram):
         the answer are then :meth:`obstacle_multipliers`'.
         """
         if self._slices is None:
-            from .minimum import scene_energy
+            from .scales import scene_energy
             from .slices import ContactSlices
             self._slices = ContactSlices(self, scene_energy(self.dp, self.modes))
         F, dF, u, ok = self._slices.reduced(s0)

@@ -8,7 +8,7 @@ Steps (nonconvex.md):
 3. the deflection scale set to the expected answer's size: the larger of the
    linear answer and the one-mode buckling amplitude
    ``A^2 = 3 (p - lambda_1) / (a ∫ (phi_1')^4)`` (non-dimensional), or a
-   channel's width where that is far smaller (:func:`rescale_for`);
+   channel's width where that is far smaller (:func:`.scales.rescale_for`);
 4. a box of amplitudes containing every minimiser (:mod:`.bounds`), tightened
    by the best energy of a few fixed-amplitude solves;
 5. the dual bound (:mod:`.dual`, no obstacle): the best first candidate
@@ -16,7 +16,7 @@ Steps (nonconvex.md):
    certify it (a unique minimiser within the gap), step 6 is skipped;
 6. else branch and bound (:mod:`.bnb`) to a certified gap of
    :data:`GAP_TARGET` of the energy scale (sum of |energy parts|, at least the
-   scene's own energy, :func:`scene_energy`);
+   scene's own energy, :func:`.scales.scene_energy`);
 7. polishing (:mod:`.polish`): the reduced function ``F(s)`` minimised from the best point
    (L-BFGS-B with its envelope gradient), then, without an obstacle, Newton on
    the full energy; the energy only goes down (with an obstacle, up to the
@@ -58,10 +58,11 @@ from . import bnb, dual
 from .alternatives import other_minimisers
 from .basin import BasinProver
 from .bnb import branch_and_bound
-from .bounds import amplitude_box, check_bounded, load_constant, mode_amplitudes
+from .bounds import amplitude_box, check_bounded
 from .modes import unstable_modes
 from .node import NodeProgram
 from .obstacle_scale import linear_on_obstacle, obstacle_energy
+from .scales import global_units, one_mode_amplitude, rescale_for, scene_energy
 from .polish import (answer_certificate, feasible_energy, flat_answer, polish, search_best,
                      to_mixed)
 
@@ -117,74 +118,6 @@ BASIN_ELEMENTS = 1024
 # With an obstacle, the gap's largest fraction of the energy of the beam on it
 # (the linear beam on the obstacle's and the buckled one's; see _run).
 RESOLVE = 1e-3
-
-
-def one_mode_amplitude(dp, modes) -> float:
-    """The one-mode estimate ``A`` of the buckled amplitude (non-dimensional, G-normalised)."""
-    return float(mode_amplitudes(dp, modes, 1)[0])
-
-
-def scene_energy(dp, modes) -> float:
-    """The scene's own energy scale (non-dimensional, in the units of ``dp``).
-
-    ``c0 + c_1 A^2 / 2``: ``c0 = f'K^-1 f / 2`` is minus the energy of the
-    unsupported linear answer, ``c_1 A^2 / 2`` minus that of the free beam
-    buckled along its first mode at the one-mode amplitude ``A``.  Both are
-    properties of the scene (load, beam, P), not of the answer; the node
-    programs' accuracy is absolute in these units (Clarabel's 1e-12), so a gap
-    can be certified relative to this energy, but not relative to an answer
-    whose own energy is zero.
-    """
-    A = one_mode_amplitude(dp, modes)
-    return load_constant(dp) + 0.5 * float(modes.c[0]) * A * A
-
-
-def global_units(dp, modes, linear):
-    """:func:`rescale_for`, with an obstacle in the size of the beam on it
-    (``linear``: :func:`.obstacle_scale.linear_on_obstacle`'s, None without).
-
-    The larger of the linear beam on the obstacle and the one-mode buckled
-    amplitude, where either more than ten times larger or smaller than ``W``
-    (the unsupported linear answer, which an obstacle absorbing an enormous
-    point force makes 1e4 times the buckled beam: the node programs, their
-    tolerances absolute in those units, then cannot resolve it).
-    """
-    if linear is None:
-        return rescale_for(dp, modes)
-    return _in_size(dp, max(linear[1] / dp.W, _buckled_size(dp, modes)), shrink=True)
-
-
-def rescale_for(dp, modes):
-    """``dp`` measured in the expected answer's size (step 3 of the module's notes).
-
-    The one-mode amplitude, where larger than the linear answer; a channel holds
-    the beam within its wider surface's distance, and that is the size where
-    more than ten times smaller (the range within which a search's units serve,
-    as for its second search: a P3 beam in a channel 2 cm wide buckled to 1/18
-    of its free amplitude, and the dense programs, their tolerances absolute in
-    those units, stalled at a gap of 0.077 of it for their 120 s, then certified
-    in 1.4 s in the answer's own scale).
-    """
-    return _in_size(dp, _buckled_size(dp, modes))
-
-
-def _buckled_size(dp, modes) -> float:
-    """The largest nodal ``|w|`` of the first mode at the one-mode amplitude [W]."""
-    A = one_mode_amplitude(dp, modes)
-    return A * float(np.max(np.abs(modes.phi[dp._w_rows(), 0]), initial=0.0))
-
-
-def _in_size(dp, size, shrink=False):
-    """``dp`` in units of ``size`` [W] where larger (and with ``shrink`` more than
-    ten times smaller); in a channel ten times narrower than that, of its wider
-    surface's distance."""
-    if dp.contact == "obstacle" and dp.g_above is not None:
-        wall = max(float(np.max(np.abs(dp.g))), float(dp.g_above))
-        if 0.0 < wall < 0.1 * max(size, 1.0):
-            return dp.rescaled(dp.W * wall)
-    if math.isfinite(size) and (size > 1.0 or (shrink and 0.0 < size < 0.1)):
-        return dp.rescaled(dp.W * size)
-    return dp
 
 
 def time_limit(dp, k: int = 1) -> float:

@@ -1,14 +1,14 @@
 """The energy of the linear beam on the obstacle: the global certificate's floor there.
 
 The branch and bound certifies its gap relative to the scene's energy, whose
-floor is the unsupported linear answer's (:func:`.minimum.scene_energy`).  An
+floor is the unsupported linear answer's (:func:`.scales.scene_energy`).  An
 obstacle can absorb a load whose unsupported energy is 1e12 times anything the
 beam can do on it: a P4 beam at gap 0 under a point force of 6.04e12 N was
 answered flat, 0 J, `optimal`, its gap 8127 J (8.4e-12 of that floor), where a
 buckled minimum lies at -1891 J.  With an obstacle the gap must also resolve the
 energy measured here (:data:`.minimum.RESOLVE`), and the search is repeated in
 the units of the beam on the obstacle where it does not
-(:func:`.minimum.global_units`).
+(:func:`.scales.global_units`).
 """
 
 from __future__ import annotations
@@ -81,7 +81,7 @@ def linear_on_obstacle(dp) -> tuple[float, float] | None:
 
 
 def obstacle_energy(dp, modes, linear) -> float | None:
-    """:func:`.minimum.scene_energy` with the linear beam on the obstacle, in the
+    """:func:`.scales.scene_energy` with the linear beam on the obstacle, in the
     units of ``dp``: ``linear`` is :func:`linear_on_obstacle`'s (None: None)."""
     if linear is None:
         return None

@@ -53,7 +53,7 @@ class ContactSlices:
     ----------
     prog : FastContactProgram
     energy_floor : float
-        The scene's energy scale (non-dimensional, :func:`.minimum.scene_energy`):
+        The scene's energy scale (non-dimensional, :func:`.scales.scene_energy`):
         a violation whose work is round-off against it is harmless (:meth:`_violation`).
 
     Examples

@@ -180,7 +180,8 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         path hands such a scene to the dense programs where they serve).
     """
     from .api import MAX_FAST_ELEMENTS, provably_convex
-    from .minimum import MAX_ELEMENTS, rescale_for, scene_energy
+    from .minimum import MAX_ELEMENTS
+    from .scales import rescale_for, scene_energy
     from .modes import MAX_UNSTABLE, unstable_modes
     from .node import NodeProgram
 

@@ -76,7 +76,7 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
     Parameters
     ----------
     dp : DiscreteProblem
-        The problem in the units of the search (:func:`.minimum.rescale_for`).
+        The problem in the units of the search (:func:`.scales.rescale_for`).
     prog
         The reduced function: ``prog.reduced([s]) -> (F, F', u, ok)`` (``F = inf``
         where no admissible beam has the amplitude ``s`` or the slice failed).
@@ -89,7 +89,7 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
     lo, hi : float
         The admissible amplitudes (the linear program's range with an obstacle).
     floor : float
-        The scene's energy scale (:func:`.minimum.scene_energy`).
+        The scene's energy scale (:func:`.scales.scene_energy`).
     c : float
         The concave coefficient ``modes.c[0]`` (F + c s^2 convex).
     polish : callable, optional

@@ -263,7 +263,7 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
         return out
     R = OWN_BOX * peak_amplitude(dp, modes)
     # (not where the square would span the admissible box: a narrow channel, whose
-    # search is already measured in its width, minimum.rescale_for)
+    # search is already measured in its width, scales.rescale_for)
     if not (math.isfinite(R) and 0.0 < R < min(S, 0.5 * float(np.max(hi - lo)))):
         return out
     found = search(dp.rescaled(dp.W * R))

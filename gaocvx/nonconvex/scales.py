@@ -1,0 +1,102 @@
+"""The global search's units and energy scale.
+
+The branch and bound's node programs are accurate to an absolute tolerance in
+the units they are solved in, so the search runs in the expected answer's size
+(:func:`rescale_for`; with an obstacle absorbing an enormous load, the size of
+the beam on it, :func:`global_units`), and its gap is certified relative to the
+scene's own energy (:func:`scene_energy`), which does not depend on the answer.
+Used by :mod:`.minimum` (steps 3 and 6 of its notes) and by the equilibria's
+searches, which run in the same units.
+
+Examples
+--------
+>>> from gaocvx.scene import Scene
+>>> from gaocvx.discrete import DiscreteProblem
+>>> from gaocvx.nonconvex.modes import unstable_modes
+>>> scene = Scene.from_dict({"beam": {"model": "gao", "supports": "P4", "length": 1.0,
+...     "E": 2.1e11, "nu": 0.3, "half_thickness": 0.1, "width": 1.0},
+...     "load": {"q": -1e3, "axial": 1.3e9}, "mesh": {"elements": 16}})
+>>> dp = DiscreteProblem(scene, check_convexity=False)
+>>> modes = unstable_modes(dp)
+>>> big = rescale_for(dp, modes)       # the buckled beam is far larger than the linear one
+>>> big.W > 100 * dp.W, scene_energy(big, modes) > 0
+(True, True)
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .bounds import load_constant, mode_amplitudes
+
+__all__ = ["one_mode_amplitude", "scene_energy", "global_units", "rescale_for"]
+
+
+def one_mode_amplitude(dp, modes) -> float:
+    """The one-mode estimate ``A`` of the buckled amplitude (non-dimensional, G-normalised)."""
+    return float(mode_amplitudes(dp, modes, 1)[0])
+
+
+def scene_energy(dp, modes) -> float:
+    """The scene's own energy scale (non-dimensional, in the units of ``dp``).
+
+    ``c0 + c_1 A^2 / 2``: ``c0 = f'K^-1 f / 2`` is minus the energy of the
+    unsupported linear answer, ``c_1 A^2 / 2`` minus that of the free beam
+    buckled along its first mode at the one-mode amplitude ``A``.  Both are
+    properties of the scene (load, beam, P), not of the answer; the node
+    programs' accuracy is absolute in these units (Clarabel's 1e-12), so a gap
+    can be certified relative to this energy, but not relative to an answer
+    whose own energy is zero.
+    """
+    A = one_mode_amplitude(dp, modes)
+    return load_constant(dp) + 0.5 * float(modes.c[0]) * A * A
+
+
+def global_units(dp, modes, linear):
+    """:func:`rescale_for`, with an obstacle in the size of the beam on it
+    (``linear``: :func:`.obstacle_scale.linear_on_obstacle`'s, None without).
+
+    The larger of the linear beam on the obstacle and the one-mode buckled
+    amplitude, where either more than ten times larger or smaller than ``W``
+    (the unsupported linear answer, which an obstacle absorbing an enormous
+    point force makes 1e4 times the buckled beam: the node programs, their
+    tolerances absolute in those units, then cannot resolve it).
+    """
+    if linear is None:
+        return rescale_for(dp, modes)
+    return _in_size(dp, max(linear[1] / dp.W, _buckled_size(dp, modes)), shrink=True)
+
+
+def rescale_for(dp, modes):
+    """``dp`` measured in the expected answer's size (step 3 of the module's notes).
+
+    The one-mode amplitude, where larger than the linear answer; a channel holds
+    the beam within its wider surface's distance, and that is the size where
+    more than ten times smaller (the range within which a search's units serve,
+    as for its second search: a P3 beam in a channel 2 cm wide buckled to 1/18
+    of its free amplitude, and the dense programs, their tolerances absolute in
+    those units, stalled at a gap of 0.077 of it for their 120 s, then certified
+    in 1.4 s in the answer's own scale).
+    """
+    return _in_size(dp, _buckled_size(dp, modes))
+
+
+def _buckled_size(dp, modes) -> float:
+    """The largest nodal ``|w|`` of the first mode at the one-mode amplitude [W]."""
+    A = one_mode_amplitude(dp, modes)
+    return A * float(np.max(np.abs(modes.phi[dp._w_rows(), 0]), initial=0.0))
+
+
+def _in_size(dp, size, shrink=False):
+    """``dp`` in units of ``size`` [W] where larger (and with ``shrink`` more than
+    ten times smaller); in a channel ten times narrower than that, of its wider
+    surface's distance."""
+    if dp.contact == "obstacle" and dp.g_above is not None:
+        wall = max(float(np.max(np.abs(dp.g))), float(dp.g_above))
+        if 0.0 < wall < 0.1 * max(size, 1.0):
+            return dp.rescaled(dp.W * wall)
+    if math.isfinite(size) and (size > 1.0 or (shrink and 0.0 < size < 0.1)):
+        return dp.rescaled(dp.W * size)
+    return dp
