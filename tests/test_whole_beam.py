@@ -183,3 +183,20 @@ def test_one_beam_whose_slopes_are_round_off():
     assert not same_beam(a, c)
     d = SimpleNamespace(x=x, w=w * (1.0 + 1e-6), slope=a.slope)
     assert not same_beam(a, d)
+
+
+def test_one_beam_whose_deflections_are_round_off():
+    # A P4 beam at gap 0 lifted within its first element only: every node at w = 0 to
+    # round-off (1e-40 m, of either size from one polish to another), its end slope
+    # 1.2e-10.  Deflections are measured against the slopes times the shortest
+    # element too; deflections that differ by 1e-6 of that are not one beam.
+    from gaocvx.nonconvex.whole_beam import same_beam
+    x = np.linspace(0.0, 1.0, 17)
+    slope = np.r_[1.236e-10, np.full(16, 2.4e-38)]
+    a = SimpleNamespace(x=x, w=np.r_[0.0, np.full(15, 2.7e-40), 0.0], slope=slope)
+    b = SimpleNamespace(x=x, w=np.r_[0.0, np.full(15, -1.1e-40), 0.0], slope=slope.copy())
+    assert same_beam(a, b, 1e-4)
+    c = SimpleNamespace(x=x, w=b.w + 1e-6 * 1.236e-10 / 16, slope=slope.copy())
+    assert not same_beam(a, c, 1e-9)
+    d = SimpleNamespace(x=x, w=a.w.copy(), slope=slope * (1.0 + 1e-6))
+    assert not same_beam(a, d, 1e-9)
