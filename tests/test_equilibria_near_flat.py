@@ -147,6 +147,32 @@ def test_on_an_obstacle_at_gap_0_the_lifted_saddle_beside_the_flat_beam_is_liste
     assert sorted(e.stable for e in eqs) == [False, True, True]
 
 
+def test_on_an_obstacle_at_gap_0_the_saddle_touching_it_is_listed():
+    # P2, one mode: the free beam's linear answer dips through the obstacle near the
+    # pinned end, too far from the saddle touching it for the polish; the list had
+    # the buckled beam and w = 0 without a saddle between them, `inaccurate`.  The
+    # reference: the independent energy's KKT measures, and its Hessian on the
+    # null space of every touching row (a descent there keeps the contact).
+    data = {"beam": {**BEAM, "supports": "P2"},
+            "load": {"q": -0.0026624409517740765, "axial": 6.0e9},
+            "mesh": {"elements": 7}, "obstacle": {"gap": 0.0}}
+    scene = Scene.from_dict(data)
+    eqs = equilibria(scene)
+    assert all(e.status == "optimal" for e in eqs)
+    assert sorted(e.stable for e in eqs) == [False, True, True]
+    en = Discrete(scene, W=1e-13)
+    R, r = en.constraints()
+    (saddle,) = [e for e in eqs if not e.stable]
+    x = en.from_nodal(saddle.w, saddle.slope)
+    kkt = en.kkt(x)
+    assert kkt["stationarity"] <= 1e-9 and kkt["feasibility"] <= 1e-12
+    touch = np.flatnonzero(R @ x - r <= 1e-9 * np.abs(x).max())
+    assert 0 < len(touch) < len(r) and np.max(np.abs(saddle.w)) < 1e-12
+    Z = sla.null_space(R[touch])
+    assert sla.eigh(Z.T @ en.hessian(x) @ Z, Z.T @ en.stiffness() @ Z,
+                    eigvals_only=True)[0] < -0.1
+
+
 def test_a_two_element_beam_lists_its_near_flat_equilibria_in_all_their_dofs():
     # P4, two modes, 1.5e-9 m into a stiff bed: with one inner node, Newton's ends
     # measured on the deflections alone passed with slopes 0.2-0.5 of the beam's

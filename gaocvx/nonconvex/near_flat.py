@@ -26,8 +26,10 @@ DOFs (deflections, and slopes times L) by at most ``STEP_TOL`` of their largest
 scale.  On an obstacle (one unstable mode) the free beam's start is polished by
 :func:`.whole_beam.polish_equilibrium` (active set, certificate and
 second-order conditions in its own scale); where the polish moves too far from
-it, nothing is added (a P2 beam at gap 0 under q = -2.7e-3 N/m: its saddle
-touching the obstacle is still missing, and the list `inaccurate`).  Ends
+it, the end of the active set's Newton's method from it is polished instead
+(:func:`.whole_beam.settled_start`: a P2 beam at gap 0 under q = -2.7e-3 N/m,
+whose free linear answer dips through the obstacle, missed its saddle touching
+the obstacle, and the list was `inaccurate`).  Ends
 within ``NEAR`` S of s = 0 are added where no listed one has their beam.
 Nothing is claimed of other equilibria there: the list's completeness is the
 searches' (within their merging distance of a listed one).
@@ -45,7 +47,8 @@ import scipy.sparse.linalg as spla
 from .basin import _residual
 from .equilibrium import Equilibrium
 from .probes import HESSIAN_ELEMENTS, hessian_stability
-from .whole_beam import MAX_UNKNOWNS, same_beam
+from .node import obstacle_rows
+from .whole_beam import MAX_UNKNOWNS, same_beam, settled_start
 from .zero_step import STEP_TOL
 
 __all__ = ["near_flat", "unresolved"]
@@ -113,8 +116,9 @@ def near_flat(dp, modes, out, S, zero_floor, polish=None) -> list:
         return out
     out = list(out)
     added = []
+    rows = None if bed else obstacle_rows(dp)
     for u in _starts(dp, modes, held=(True, False) if bed else (False,)):
-        e = _bed_end(dp, modes, u, zero_floor) if bed else polish(u)
+        e = _bed_end(dp, modes, u, zero_floor) if bed else _obstacle_end(u, polish, dp, rows)
         if e is None or not float(np.linalg.norm(e.amplitudes)) <= NEAR * S:
             continue
         same = [o for o in out + added if same_beam(e, o, SAME)]
@@ -195,6 +199,18 @@ def _bed_end(dp, modes, u, zero_floor):
                        [float(a) for a in modes.phi.T @ (dp.G @ u)], dp.x.copy(), w, slope,
                        float(step), "inaccurate" if noisy else "optimal", float(dp.P),
                        math.nan, float(dp.W), whole_beam=True)
+
+
+def _obstacle_end(u, polish, dp, rows):
+    """The equilibrium :func:`.whole_beam.polish_equilibrium` certifies from ``u``,
+    else from the end of the active set's Newton's method from ``u`` (the free
+    beam's linear answer dips through the obstacle, too far from the saddle
+    touching it for the polish), or None."""
+    e = polish(u)
+    if e is not None:
+        return e
+    x = settled_start(dp, u, *rows)
+    return None if x is None else polish(x)
 
 
 def _round_off_step(dp, u, draws: int = 2) -> float:

@@ -195,6 +195,25 @@ def polish_equilibrium(dp, modes, u, rows, levels):
                        float(dp.P), math.nan, float(dp.W), whole_beam=True)
 
 
+def settled_start(dp, u, rows, levels):
+    """The end of the active set's Newton's method from ``u`` with the rows it
+    touches or violates held, or None where it does not settle.
+
+    A start for :func:`polish_equilibrium` where ``u`` lies too far from any
+    equilibrium for it (its ``MOVE``): the free beam's linear answer, which dips
+    through an obstacle at gap 0 (a P2 beam of 7 elements, q = -2.7e-3 N/m, P =
+    6e9 N: the saddle touching the obstacle beside the flat beam was missing).
+    What :func:`polish_equilibrium` then certifies is an equilibrium however it
+    was found; which one is the caller's to judge.
+    """
+    size = beam_size(dp, u, rows)
+    if not (math.isfinite(size) and size > 0.0) or len(u) > MAX_UNKNOWNS:
+        return None
+    x, _ = _active_set(dp, np.asarray(u, float), rows, levels,
+                       np.flatnonzero(rows @ u - levels <= 0.0), size)
+    return x
+
+
 def _active_set(dp, x, rows, levels, act, size) -> tuple:
     """Newton's method on the active rows ``act``, then the most violated row added or
     else the most pulling row dropped, until neither; ``(x, lam)``, or ``(None, None)``
