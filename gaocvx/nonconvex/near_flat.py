@@ -65,8 +65,9 @@ MOVES = (-4.0, -1.0, -0.25, 0.25, 1.0, 4.0)
 #: Ends farther from s = 0 than this times S are left to the searches.
 NEAR = 1e-4
 #: An end is `optimal` only where this times the gradient's round-off moves its DOFs
-#: by at most ``STEP_TOL`` of their size (:func:`_round_off_step`: 1e-14 of them,
-#: as the independent energy's step, on 520 to 2048 elements where it was measured).
+#: by at most ``STEP_TOL`` of their size (:func:`_round_off_step`: 3e-15 to 3e-14 of
+#: them on 520 to 2048 elements, 3 to 20 times the rounding's effect measured in
+#: exact arithmetic).
 NOISE_MARGIN = 10.0
 #: Beams within this (:func:`.whole_beam.same_beam`) of a listed one are that one.
 SAME = 1e-4
