@@ -28,7 +28,7 @@ import pytest
 from nonconvex_campaign_support import MAX_MODES, random_scene, run_case
 
 from gaocvx import Scene, solve
-from gaocvx.nonconvex import minimum
+from gaocvx.nonconvex import minimum, obstacle_scale
 from gaocvx.nonconvex.obstacle_scale import linear_on_obstacle
 
 # (seed, index) of the generator, each on 8 or 12 elements as it draws them.
@@ -598,6 +598,7 @@ def test_a_force_the_obstacle_absorbs_does_not_hide_the_buckled_minimum(monkeypa
         return real_search(*args, **kwargs)
 
     monkeypatch.setattr(minimum, "linear_on_obstacle", counted)
+    monkeypatch.setattr(obstacle_scale, "linear_on_obstacle", counted)
     monkeypatch.setattr(minimum, "solve_global", search)
 
     scaled = {**_ABSORBED,

@@ -26,8 +26,10 @@ log = logging.getLogger(__name__)
 
 
 def linear_on_obstacle(dp) -> tuple[float, float] | None:
-    """The linear beam on the obstacle: ``(c0, size)``, in J and m (the same in
-    any units of the scene; solved once, in those of ``dp``).
+    """The linear beam on the obstacle: ``(c0, size)``, in J and m, solved in the
+    units of ``dp`` (Clarabel's tolerances are absolute in them: a beam pressed
+    flat measured 2e-5 m in a scene's first units and 2e-11 m in the buckled
+    beam's; ``size`` only chooses the second search's units).
 
     ``c0 = -min 1/2 u'K u - f'u`` over the obstacle's rows (``A u >= levels``, a
     channel's too; a convex QP, Clarabel), at least 0 (``w = 0`` is admissible),
