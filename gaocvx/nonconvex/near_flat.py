@@ -18,10 +18,10 @@ between it and the buckled beam, was missing the same way (one mode: the list
 Here Newton's method on the whole beam starts from the linear answers (with
 every bed point held, and with every one released), and from those moved along
 each unstable mode; on a bed also from the searches' own entries near s = 0,
-whose beams were measured along the mode alone.  On a bed it is semismooth Newton on the gradient (in
-extended precision, :func:`.basin._residual`; the bed's Hessian on the points
-it holds); an end whose last step moves its
-DOFs (deflections, and slopes times L) by at most ``STEP_TOL`` of their largest
+whose beams were measured along the mode alone.  On a bed it is semismooth
+Newton on the gradient (in extended precision, :func:`.basin._residual`; the
+bed's Hessian on the points it holds); an end whose last step moves its DOFs
+(deflections, and slopes times L) by at most ``STEP_TOL`` of their largest
 (at least the zero floor), and whose stability the Hessian decides
 (:func:`.probes.hessian_stability`), is an equilibrium certified in its own
 scale.  On an obstacle (one unstable mode) the free beam's start is polished by
