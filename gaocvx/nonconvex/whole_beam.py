@@ -56,6 +56,7 @@ import scipy.sparse.linalg as spla
 from ..certificate import passes
 from ..tolerances import TOUCH_TOL
 from .certificate import beam_size, psi_certificate
+from .cone import stable_on_cone
 from .equilibrium import Equilibrium, same_point
 
 __all__ = ["polish_equilibrium", "polisher", "settle", "same_beam", "second_order", "eig_tol",
@@ -390,7 +391,8 @@ def second_order(dp, x, rows, gap, lam, size):
         return True
     if _least(H, K, rows, touch) < -tol:
         return False
-    return None
+    # (between the two: rows touching without a force, one way only)
+    return stable_on_cone(H, K, rows, strong, np.setdiff1d(touch, strong), tol)
 
 
 def _least(H, K, rows, idx) -> float:
