@@ -30,11 +30,29 @@ import warnings
 import numpy as np
 import scipy.linalg as la
 
-__all__ = ["stable_on_cone", "CONE_TOL"]
+__all__ = ["stable_on_cone", "restricted_pencil", "CONE_TOL"]
 
 #: The least curvature on the cone (relative to K) must exceed this as well as
 #: the caller's threshold: the QP's value is Clarabel's, accurate to about 1e-8.
 CONE_TOL = 1e-6
+
+
+def restricted_pencil(H, K, rows, idx, vectors: bool = False) -> tuple:
+    """``(mu, Y)``: the eigenvalues of ``H`` relative to ``K`` on the null space of
+    ``rows[idx]`` (ascending; none where that space is empty) and, with ``vectors``,
+    their eigenvectors in the DOFs (``K``-orthonormal; else None)."""
+    Z = la.null_space(rows[idx].toarray()) if len(idx) else np.eye(H.shape[0])
+    if Z.shape[1] == 0:
+        return np.zeros(0), (np.zeros((H.shape[0], 0)) if vectors else None)
+    M, N = Z.T @ H @ Z, Z.T @ K @ Z
+    # (Jacobi-scaled: unscaled, the least eigenvalue at 480 elements, cond K 7e10,
+    # was 2.3e-7 off the scaled one and 1 + that of (H - K, K), which agree -- a
+    # review; at 30 elements all three agree to 6e-12)
+    s = 1.0 / np.sqrt(np.abs(np.diag(N)))
+    if not vectors:
+        return la.eigh(s[:, None] * M * s, s[:, None] * N * s, eigvals_only=True), None
+    mu, V = la.eigh(s[:, None] * M * s, s[:, None] * N * s)
+    return mu, Z @ (s[:, None] * V)
 
 
 def stable_on_cone(H, K, rows, strong, weak, tol: float) -> bool | None:
@@ -62,15 +80,10 @@ def stable_on_cone(H, K, rows, strong, weak, tol: float) -> bool | None:
     strong, weak = np.asarray(strong, int), np.asarray(weak, int)
     if len(weak) == 0:
         return None
-    Z = la.null_space(rows[strong].toarray()) if len(strong) else np.eye(H.shape[0])
-    if Z.shape[1] < 2:
+    mu, Y = restricted_pencil(H, K, rows, strong, vectors=True)
+    if len(mu) < 2 or not (mu[0] < -tol and mu[1] > tol):
         return None
-    M, N = Z.T @ H @ Z, Z.T @ K @ Z
-    s = 1.0 / np.sqrt(np.abs(np.diag(N)))
-    mu, V = la.eigh(s[:, None] * M * s, s[:, None] * N * s)
-    if not (mu[0] < -tol and mu[1] > tol):
-        return None
-    W = rows[weak].toarray() @ Z @ (s[:, None] * V)
+    W = rows[weak].toarray() @ Y
     norms = np.linalg.norm(W, axis=1)
     W = W[norms > 0] / norms[norms > 0, None]
     b = cp.Variable(len(mu) - 1)

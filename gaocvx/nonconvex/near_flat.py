@@ -133,8 +133,8 @@ def near_flat(dp, modes, out, S, zero_floor, polish=None) -> list:
         same = [o for o in out + added if same_beam(e, o, SAME)]
         # (an `optimal` end takes the place of listed ones that are not, or are the
         # searches' own; one that is not adds its beam only where none is listed)
-        if (any(o.status == "optimal" and (o.whole_beam or e.status != "optimal") for o in same)
-                or (same and e.status != "optimal")):
+        if same and (e.status != "optimal"
+                     or any(o.status == "optimal" and o.whole_beam for o in same)):
             continue
         out = [o for o in out if all(o is not t for t in same)]
         added = [o for o in added if all(o is not t for t in same)]
