@@ -361,3 +361,47 @@ def test_on_an_obstacle_the_flat_beam_a_force_presses_on_one_row_is_stable():
         x0 = np.abs(rng.normal(size=en.n)) * 10 ** rng.uniform(-7, -4)
         x, _, ok = en.local_min(x0, slsqp_iter=400)
         assert np.abs(en.nodal_w(x)).max() <= 1e-3 * np.abs(en.nodal_w(x0)).max()
+
+
+def _independent_minima(scene, gap, starts=40, seed=3):
+    """The stable KKT points (nodal w [m], rows touching) the independent energy's
+    local minimisations reach from random starts 0.1 to 30 gaps in size (half of
+    them sunk towards the obstacle), each stationary (1e-9), admissible (1e-9 gaps), and of
+    positive curvature on the null space of the rows that carry a force."""
+    en = Discrete(scene, W=gap)
+    rng = np.random.default_rng(seed)
+    minima = []
+    for i in range(starts):
+        x0 = rng.normal(size=en.n) * 10 ** rng.uniform(-1, 1.5)
+        x, _, _ = en.local_min(-np.abs(x0) if i % 2 else x0, slsqp_iter=400)
+        kkt = en.kkt(x)
+        if (kkt["stationarity"] <= 1e-9 and kkt["feasibility"] <= 1e-9 and kkt["lowest"] > 1e-6
+                and np.abs(x).max() < 1e4
+                and not any(np.abs(x - v).max() <= 1e-5 * np.abs(x).max() for v, _ in minima)):
+            minima.append((x, kkt["touching"]))
+    return [(en.nodal_w(x), touching) for x, touching in minima]
+
+
+@pytest.mark.parametrize("supports, q, axial, elements, gap", [
+    ("P4", -4.576981689367951e-06, 1209421693.248454, 4, 9.645301491960067e-15),
+    ("P1", -1.6014543882716547e-06, 6916539406.4807005, 5, 1.053305443479622e-13)])
+def test_on_an_obstacle_a_small_gap_below_the_beam_pressed_one_gap_deep_is_listed(
+        supports, q, axial, elements, gap):
+    # A campaign (seeds 1 and 2 of 60 draws each, gaps 1e-15 to 3e-13 m): the beam
+    # pressed onto the obstacle, touching it at one point, is a strict local
+    # minimum lying within the searches' merging distance of the saddle beside it
+    # (the free beam's linear answer); the lists held the buckled beam and that
+    # saddle, `optimal` and `complete`.  Now the neighbourhood of the flat beam is
+    # searched again in its own scale (zooms.own_scale).
+    scene = Scene.from_dict({"beam": {**BEAM, "supports": supports},
+                             "load": {"q": q, "axial": axial},
+                             "mesh": {"elements": elements}, "obstacle": {"gap": gap}})
+    minima = _independent_minima(scene, gap)
+    pressed = [w for w, touching in minima if np.abs(w).max() < 10 * gap and touching]
+    assert len(pressed) == 1
+    eqs = equilibria(scene)
+    assert all(e.status == "optimal" and e.complete for e in eqs)
+    for w, _ in minima:
+        hits = [e for e in eqs if np.max(np.abs(e.w - w)) <= 1e-6 * np.abs(w).max()]
+        assert len(hits) == 1 and hits[0].stable
+    assert sorted(e.stable for e in eqs) == [False, True, True]

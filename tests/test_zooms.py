@@ -1,7 +1,8 @@
 """The second search near the flat beam in its own scale (gaocvx.nonconvex.zooms.own_scale).
 
-Hand-made lists and problems: when the search runs (the flat beam listed stable
-and `optimal`) and when not, the scale it measures the problem
+Hand-made lists and problems: when the search runs (two modes: the flat beam
+listed stable and `optimal`; one: its own scale below NEAR_FLAT of the range) and
+when not, the scale it measures the problem
 in (the linearised energy's peak along a mode, worked out by hand), and what
 of its finds is listed, in whose units.  The campaign scenes it was made for
 are in tests/test_nonconvex_equilibria.py.
@@ -15,7 +16,9 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from gaocvx.nonconvex.zooms import OWN_BOX, own_scale, peak_amplitude
+from gaocvx.nonconvex import node
+from gaocvx.nonconvex.equilibrium import MERGE
+from gaocvx.nonconvex.zooms import NEAR_FLAT, OWN_BOX, own_scale, peak_amplitude
 
 
 def _problem():
@@ -23,7 +26,7 @@ def _problem():
     # peaks at t = 1/2; along e_2 (t/4 against t^2/2) at t = 1/4
     f = np.array([-2.0, 0.25])
     return NS(contact="obstacle", f=f, hessian=lambda u: sp.diags([-4.0, -1.0]), W=3.0,
-              rescaled=lambda W: NS(W=W)), NS(phi=np.eye(2))
+              rescaled=lambda W: NS(W=W)), NS(phi=np.eye(2), k=2)
 
 
 def _eq(stable, w, s, status="optimal", energy=0.0, W=3.0, polished=False):
@@ -121,3 +124,50 @@ def test_an_unpolished_entry_at_a_polished_ones_beam_gives_way():
     assert id(first[2]) not in ids
     assert all(id(e) in ids for e in first[:2] + first[3:])
     assert len(out) == len(first) + 1 and sum(e.whole_beam for e in out) == 1
+
+
+def _one_mode(monkeypatch):
+    # H_0 = -4, f = -2: the peak at 1/2; the obstacle row u >= -3: the mode reaches
+    # it at s = -3, so the near-flat scale is 3 and R = OWN_BOX 3
+    monkeypatch.setattr(node, "obstacle_rows",
+                        lambda dp: (np.array([[1.0]]), np.array([-3.0])))
+    return (NS(contact="obstacle", f=np.array([-2.0]), hessian=lambda u: sp.diags([-4.0]),
+               W=3.0, rescaled=lambda W: NS(W=W)), NS(phi=np.eye(1), k=1))
+
+
+@pytest.mark.parametrize("S, searched", [(1.01 * OWN_BOX * 3.0 / NEAR_FLAT, True),
+                                         (0.99 * OWN_BOX * 3.0 / NEAR_FLAT, False)])
+def test_one_mode_is_searched_where_its_scale_lies_below_near_flat_of_the_range(
+        monkeypatch, S, searched):
+    # (without a flat beam listed: at a gap above 0 it is no equilibrium)
+    dp, modes = _one_mode(monkeypatch)
+    seen = []
+
+    def search(d):
+        seen.append(d.W)
+        return []
+    out = [_eq(True, [5.0, 1.0], [0.9 * S])]
+    own_scale(dp, modes, out, S, np.full(1, -S), np.full(1, S), search)
+    assert seen == ([pytest.approx(dp.W * OWN_BOX * 3.0, rel=1e-15)] if searched else [])
+
+
+@pytest.mark.parametrize("resolved", [True, False])
+def test_an_entry_not_optimal_gives_way_within_merge_S_where_every_find_is_optimal(
+        monkeypatch, resolved):
+    # the first search's entry stood for the pressed beam 0.1 R off it (within MERGE
+    # S, not MERGE R): it gives way where the second search found every beam
+    # `optimal`, and stays where one of them is not
+    dp, modes = _one_mode(monkeypatch)
+    S, R = 1e8, OWN_BOX * 3.0
+    assert 0.1 * R < MERGE * S
+
+    def search(d):
+        return [_eq(True, [-1e-3, 0.0], [-0.25], W=d.W),
+                _eq(False, [1e-3, 0.0], [0.05], "optimal" if resolved else "inaccurate",
+                    W=d.W)]
+    first = [_eq(True, [5.0, 1.0], [0.9 * S]),
+             _eq(False, [-1e-3, 0.0], [-0.35 * R], "inaccurate")]
+    out = own_scale(dp, modes, first, S, np.full(1, -S), np.full(1, S), search)
+    ids = [id(e) for e in out]
+    assert (id(first[1]) in ids) is not resolved
+    assert sum(e.stable and e.amplitudes == pytest.approx([-0.25 * R]) for e in out) == 1

@@ -315,6 +315,29 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
             out = sorted(settle(dp, polish, exact_flat(dp, modes, out, classify, S=S), S,
                                 modes),
                          key=lambda e: e.energy)
+        if obstacle and None not in out:
+            own = {}
+
+            def own_line(d):
+                # the segment [-1, 1] of d's units, within its admissible amplitudes
+                p, polish_d = program(d), polisher(d, modes)
+                a, b = (float(v[0]) for v in admissible(p))
+                a, b = max(-1.0, a), min(1.0, b)
+                found, own["complete"] = line.find_line(
+                    d, p, 1.0, np.linspace(a, b, grid), grid, a, b, scene_energy(d, modes),
+                    float(modes.c[0]), polish_d, dtol=dtol, probe_tol=probe_tol,
+                    zero_floor=zero_floor(d))
+                if None in found:
+                    own["complete"] = False
+                    found = [f for f in found if f is not None]
+                check_contact(d, p, found, polish_d, 1.0)
+                return settle(d, polish_d, found, 1.0, modes)
+
+            # the flat beam's neighbourhood again, in its own scale (:mod:`.zooms`);
+            # the list's proof holds there only where that search's does too
+            out = sorted(own_scale(dp, modes, out, S, lo, hi, own_line), key=lambda e: e.energy)
+            if complete is not None and "complete" in own:
+                complete = complete and bool(own["complete"])
     if out and None not in out:
         # the beams near w = 0 on a bed or an obstacle at gap 0, in their own scale
         # (:mod:`.near_flat`)

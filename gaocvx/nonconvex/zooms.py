@@ -14,11 +14,12 @@ Both take the search as an argument (``search(S, box=, starts=, minimisers=)``,
 :func:`.stationary2.find_plane` without zooms of its own) and return the
 merged list.
 
-A third place needs a finer *scale*, not a finer grid: the flat beam pressed at
-gap 0, whose saddle towards the buckled beam lies so near it, and so low, that
-the scene's slices cannot resolve its reduced gradient at all
-(:func:`own_scale`: the search again in a problem measured in that saddle's
-own size).
+A third place needs a finer *scale*, not a finer grid: the beam near w = 0 on an
+obstacle, whose equilibria lie so near it, and so low, that the scene's slices
+cannot resolve its reduced gradient at all (:func:`own_scale`: the search again
+in a problem measured in their own size; with two modes where the flat beam is
+pressed at gap 0, with one wherever that size is below ``NEAR_FLAT`` of the
+amplitude range).
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ from scipy.sparse.csgraph import connected_components
 from .equilibrium import MERGE, same_point
 from .whole_beam import same_beam
 
-__all__ = ["near_flat", "clusters", "own_scale", "peak_amplitude", "NEAR_FLAT",
+__all__ = ["near_flat", "clusters", "own_scale", "own_size", "peak_amplitude", "NEAR_FLAT",
            "CLUSTER_STEPS", "CLUSTER_GRID", "MAX_CLUSTERS", "OWN_BOX", "SAME_BEAM"]
 
 log = logging.getLogger(__name__)
@@ -217,10 +218,51 @@ def peak_amplitude(dp, modes) -> float:
     return max(peaks, default=math.nan)
 
 
+def own_size(dp, modes, rows=None, peak=None) -> float:
+    """The near-flat equilibria's amplitude scale on an obstacle, one unstable mode:
+    the larger of :func:`peak_amplitude` and the amplitudes at which the mode alone
+    first reaches a surface of the obstacle, either way.
+
+    Pressed by a load far below the buckled beam's scale onto an obstacle a small
+    gap below, the beam has a stable equilibrium about one gap deep, besides the
+    free beam's linear answer near the peak (campaign: P4, 4 elements, gap
+    9.6e-15 m, q = -4.6e-6 N/m: the pressed minimum at 1.0 and the saddle at 1.15
+    times the mode's reach).
+
+    ``rows``: the obstacle's rows and levels (:func:`.node.obstacle_rows`'s, by
+    default).  A mode ``(1, 0)`` under the rows ``u_1 >= -3`` and
+    ``u_1 + u_2 <= 2`` (as ``-u_1 - u_2 >= -2``), without load:
+
+    >>> import numpy as np
+    >>> from types import SimpleNamespace
+    >>> rows = (np.array([[1.0, 0.0], [-1.0, -1.0]]), np.array([-3.0, -2.0]))
+    >>> own_size(None, SimpleNamespace(phi=np.array([[1.0], [0.0]])), rows, peak=np.nan)
+    3.0
+    """
+    if rows is None:
+        from .node import obstacle_rows
+        rows = obstacle_rows(dp)
+    A, levels = rows
+    sizes = [peak_amplitude(dp, modes) if peak is None else peak]
+    for phi in np.asarray(modes.phi, float).T:
+        for reach in (A @ phi, -(A @ phi)):    # (s > 0 and s < 0: rows s t >= level)
+            out = reach < 0.0
+            if np.any(out):
+                sizes.append(float(np.min(levels[out] / reach[out])))
+    sizes = [x for x in sizes if math.isfinite(x)]
+    return max(sizes, default=math.nan)
+
+
 def own_scale(dp, modes, out, S, lo, hi, search) -> list:
     """The flat beam's neighbourhood searched again in a problem of its own scale.
 
-    Where ``out`` lists the flat beam as a stable ``optimal`` equilibrium (pressed
+    With one unstable mode (:func:`own_size`): wherever ``R = OWN_BOX`` times
+    that size lies below ``NEAR_FLAT`` of the amplitude range ``S`` (and of the
+    admissible range), the equilibria near the flat beam lie closer together
+    than the first search resolves (campaign: a stable beam pressed one gap
+    deep, 1e-14 m, was missing from lists called complete, within the merging
+    distance of the saddle beside it).
+    With two, where ``out`` lists the flat beam as a stable ``optimal`` equilibrium (pressed
     at gap 0), its neighbourhood holds the saddles between it and the buckled
     beam (the mountain pass, :func:`.equilibrium.check_mountain_pass`).  Pressed
     by a small load, they lie where the load's work and the unstable modes' fall
@@ -230,19 +272,21 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
     minima and no saddle, the saddles 1e-4 to 183 J against the scene's 1e7 to
     1e9 J; where one saddle was found, its mirror pairs beside it were not).
     The problem is measured again in ``R = OWN_BOX`` times
-    :func:`peak_amplitude` (``dp.rescaled``), and ``search(dp_R)`` searches its
-    square of size 1 (:func:`.stationary2.find_plane` without zooms).  Its
+    :func:`peak_amplitude` (one mode: :func:`own_size`; ``dp.rescaled``), and
+    ``search(dp_R)`` searches its square of size 1 (:func:`.stationary2.find_plane`
+    without zooms; one mode: the segment, :func:`.stationary1.find_line`).  Its
     ``optimal`` equilibria other than the flat beam, and not on a side of the
     square where the admissible amplitudes go on (minima there are the
     square's), are listed in ``dp``'s units unless one is there already (within
-    ``MERGE R``); an entry of ``out`` there that is not ``optimal`` gives way, and
-    so does one not polished on the whole beam within ``SAME_BEAM`` of one that
-    is (deflection and slope, relative).
+    ``MERGE R``); an entry of ``out`` there that is not ``optimal`` gives way
+    (within ``MERGE S``, where every beam the second search found is
+    ``optimal``: it stood for them), and so does one not polished on the whole
+    beam within ``SAME_BEAM`` of one that is (deflection and slope, relative).
 
     Parameters
     ----------
     dp, modes : DiscreteProblem, Modes
-        The problem with an obstacle and its two unstable modes.
+        The problem with an obstacle and its one or two unstable modes.
     out : list of Equilibrium
         The search's equilibria.
     S : float
@@ -258,13 +302,17 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
     list of Equilibrium
         ``out``, with what the second search found added.
     """
-    if dp.contact != "obstacle" or not any(
-            e.stable and e.status == "optimal" and not np.any(e.w) for e in out):
+    if dp.contact != "obstacle":
         return out
-    R = OWN_BOX * peak_amplitude(dp, modes)
+    if modes.k == 1:
+        R, reach = OWN_BOX * own_size(dp, modes), NEAR_FLAT
+    elif any(e.stable and e.status == "optimal" and not np.any(e.w) for e in out):
+        R, reach = OWN_BOX * peak_amplitude(dp, modes), 1.0
+    else:
+        return out
     # (not where the square would span the admissible box: a narrow channel, whose
     # search is already measured in its width, scales.rescale_for)
-    if not (math.isfinite(R) and 0.0 < R < min(S, 0.5 * float(np.max(hi - lo)))):
+    if not (math.isfinite(R) and 0.0 < R < reach * min(S, 0.5 * float(np.max(hi - lo)))):
         return out
     found = search(dp.rescaled(dp.W * R))
     edge = 1.0 - 1e-6
@@ -278,11 +326,15 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
         if not any(same_point(f.amplitudes, e.amplitudes, R)
                    for e in added + [e for e in out if e.status == "optimal"]):
             added.append(f)
+    # (where the second search found every beam it lists accurately, an entry of the
+    # first that is not `optimal` stood for what lies within its merging distance:
+    # one mode, a beam pressed one gap deep listed 2e-4 R off, unstable, no KKT point)
+    clean = all(f.status == "optimal" for f in found if np.any(f.w))
     kept = [e for e in out if e.status == "optimal" or not any(
-        same_point(e.amplitudes, f.amplitudes, R) for f in added)]
+        same_point(e.amplitudes, f.amplitudes, S if clean else R) for f in added)]
     merged = _one_beam(kept + added, R)
-    log.info("equilibria (k = 2): near the flat beam searched again in its own scale "
-             "(%.3g S): %d more, %d replaced", R / S, len(merged) - len(kept),
+    log.info("equilibria (k = %d): near the flat beam searched again in its own scale "
+             "(%.3g S): %d more, %d replaced", modes.k, R / S, len(merged) - len(kept),
              len(out) - len(kept))
     return merged
 
