@@ -405,3 +405,37 @@ def test_on_an_obstacle_a_small_gap_below_the_beam_pressed_one_gap_deep_is_liste
         hits = [e for e in eqs if np.max(np.abs(e.w - w)) <= 1e-6 * np.abs(w).max()]
         assert len(hits) == 1 and hits[0].stable
     assert sorted(e.stable for e in eqs) == [False, True, True]
+
+
+@pytest.mark.slow
+def test_two_modes_on_an_obstacle_a_small_gap_below_list_the_beam_pressed_onto_it():
+    # A trial (8 scenes, two modes, gaps 2e-15 to 1.5e-13 m): P1 under a point
+    # force, 7 elements, the obstacle 4.9e-14 m below.  The list held the buckled
+    # beam alone (`optimal`, not `complete`); the beam pressed onto the obstacle at
+    # two points, a strict local minimum, was missing, and so were the saddles
+    # beside it.  The reference: each near-flat entry a KKT point of the
+    # independent energy, stable ones of positive curvature on the null space of
+    # the rows carrying a force, unstable ones of negative curvature on that of
+    # every touching row.
+    gap = 4.9382087237037086e-14
+    scene = Scene.from_dict({"beam": {**BEAM, "supports": "P1"},
+                             "load": {"points": [[0.1541426098893065, -0.0010873888728728232]],
+                                      "axial": 10094602912.665861},
+                             "mesh": {"elements": 7}, "obstacle": {"gap": gap}})
+    eqs = equilibria(scene)
+    assert all(e.status == "optimal" for e in eqs)
+    near = [e for e in eqs if np.abs(e.w).max() < 10 * gap]
+    assert sum(e.stable for e in near) >= 1 and any(not e.stable for e in near)
+    en = Discrete(scene, W=gap)
+    R, r = en.constraints()
+    for e in near:
+        x = en.from_nodal(e.w, e.slope)
+        kkt = en.kkt(x)
+        assert kkt["stationarity"] <= 1e-9 and kkt["feasibility"] <= 1e-12
+        if e.stable:
+            assert kkt["lowest"] > 1e-3
+        else:
+            touch = np.flatnonzero(R @ x - r <= 1e-9 * np.abs(x).max())
+            Z = sla.null_space(R[touch]) if len(touch) else np.eye(en.n)
+            assert sla.eigh(Z.T @ en.hessian(x) @ Z, Z.T @ en.stiffness() @ Z,
+                            eigvals_only=True)[0] < -1e-3

@@ -53,13 +53,31 @@ def test_peak_amplitude_is_the_largest_over_the_falling_modes():
     [_eq(False, [0.0, 0.0], [0.0, 0.0]), _eq(True, [5.0, 1.0], [40.0, 2.0])],  # flat unstable
     [_eq(True, [0.0, 0.0], [0.0, 0.0], "inaccurate"), _eq(True, [5.0, 1.0], [40.0, 2.0])],
 ])
-def test_not_searched_unless_the_flat_beam_is_listed_stable_and_optimal(out):
+def test_not_searched_unless_the_flat_beam_is_listed_stable_and_optimal(monkeypatch, out):
+    # (nor, with two modes, where its own size, here the rows' reach 10 along
+    # either mode, is not below NEAR_FLAT of S: R = 40 against 0.1)
     dp, modes = _problem()
+    monkeypatch.setattr(node, "obstacle_rows", lambda dp: (np.eye(2), np.full(2, -10.0)))
 
     def search(d):
         raise AssertionError("searched")
     assert own_scale(dp, modes, out, 100.0, np.full(2, -100.0), np.full(2, 100.0),
                      search) is out
+
+
+def test_two_modes_are_searched_without_a_flat_beam_where_their_size_is_small(monkeypatch):
+    # the rows' reach 10 along either mode: R = 40, below NEAR_FLAT of S = 1e5
+    dp, modes = _problem()
+    monkeypatch.setattr(node, "obstacle_rows", lambda dp: (np.eye(2), np.full(2, -10.0)))
+    seen = []
+
+    def search(d):
+        seen.append(d.W)
+        return []
+    S = 1e5
+    own_scale(dp, modes, [_eq(True, [5.0, 1.0], [40.0, 2.0])], S, np.full(2, -S),
+              np.full(2, S), search)
+    assert seen == [pytest.approx(dp.W * OWN_BOX * 10.0, rel=1e-15)]
 
 
 def test_its_finds_are_listed_in_the_problems_units():

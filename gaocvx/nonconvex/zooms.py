@@ -219,8 +219,8 @@ def peak_amplitude(dp, modes) -> float:
 
 
 def own_size(dp, modes, rows=None, peak=None) -> float:
-    """The near-flat equilibria's amplitude scale on an obstacle, one unstable mode:
-    the larger of :func:`peak_amplitude` and the amplitudes at which the mode alone
+    """The near-flat equilibria's amplitude scale on an obstacle: the largest of
+    :func:`peak_amplitude` and the amplitudes at which each unstable mode alone
     first reaches a surface of the obstacle, either way.
 
     Pressed by a load far below the buckled beam's scale onto an obstacle a small
@@ -256,14 +256,15 @@ def own_size(dp, modes, rows=None, peak=None) -> float:
 def own_scale(dp, modes, out, S, lo, hi, search) -> list:
     """The flat beam's neighbourhood searched again in a problem of its own scale.
 
-    With one unstable mode (:func:`own_size`): wherever ``R = OWN_BOX`` times
-    that size lies below ``NEAR_FLAT`` of the amplitude range ``S`` (and of the
-    admissible range), the equilibria near the flat beam lie closer together
-    than the first search resolves (campaign: a stable beam pressed one gap
-    deep, 1e-14 m, was missing from lists called complete, within the merging
-    distance of the saddle beside it).
-    With two, where ``out`` lists the flat beam as a stable ``optimal`` equilibrium (pressed
-    at gap 0), its neighbourhood holds the saddles between it and the buckled
+    Wherever ``R = OWN_BOX`` times :func:`own_size` lies below ``NEAR_FLAT`` of
+    the amplitude range ``S`` (and of the admissible range), the equilibria near
+    the flat beam lie closer together than the first search resolves (campaign,
+    one mode: a stable beam pressed one gap deep, 1e-14 m, was missing from lists
+    called complete, within the merging distance of the saddle beside it; two
+    modes: such beams missing from lists of one entry, not complete).
+    With two modes, where ``out`` lists the flat beam as a stable ``optimal``
+    equilibrium (pressed at gap 0), R is measured by :func:`peak_amplitude` alone
+    and compared with ``S``: its neighbourhood holds the saddles between it and the buckled
     beam (the mountain pass, :func:`.equilibrium.check_mountain_pass`).  Pressed
     by a small load, they lie where the load's work and the unstable modes' fall
     balance, so near the flat beam and so low that the scene's slices, whose
@@ -271,8 +272,7 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
     all (the campaign's seeds 7101-7108: in 12 of 96 scenes the list was two
     minima and no saddle, the saddles 1e-4 to 183 J against the scene's 1e7 to
     1e9 J; where one saddle was found, its mirror pairs beside it were not).
-    The problem is measured again in ``R = OWN_BOX`` times
-    :func:`peak_amplitude` (one mode: :func:`own_size`; ``dp.rescaled``), and
+    The problem is measured again in ``R`` (``dp.rescaled``), and
     ``search(dp_R)`` searches its square of size 1 (:func:`.stationary2.find_plane`
     without zooms; one mode: the segment, :func:`.stationary1.find_line`).  Its
     ``optimal`` equilibria other than the flat beam, and not on a side of the
@@ -304,12 +304,10 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
     """
     if dp.contact != "obstacle":
         return out
-    if modes.k == 1:
-        R, reach = OWN_BOX * own_size(dp, modes), NEAR_FLAT
-    elif any(e.stable and e.status == "optimal" and not np.any(e.w) for e in out):
+    if any(e.stable and e.status == "optimal" and not np.any(e.w) for e in out) and modes.k == 2:
         R, reach = OWN_BOX * peak_amplitude(dp, modes), 1.0
     else:
-        return out
+        R, reach = OWN_BOX * own_size(dp, modes), NEAR_FLAT
     # (not where the square would span the admissible box: a narrow channel, whose
     # search is already measured in its width, scales.rescale_for)
     if not (math.isfinite(R) and 0.0 < R < reach * min(S, 0.5 * float(np.max(hi - lo)))):
