@@ -17,9 +17,9 @@ merged list.
 A third place needs a finer *scale*, not a finer grid: the beam near w = 0 on an
 obstacle, whose equilibria lie so near it, and so low, that the scene's slices
 cannot resolve its reduced gradient at all (:func:`own_scale`: the search again
-in a problem measured in their own size; with two modes where the flat beam is
-pressed at gap 0, with one wherever that size is below ``NEAR_FLAT`` of the
-amplitude range).
+in a problem measured in their own size, wherever that size is below
+``NEAR_FLAT`` of the amplitude range, and with two modes where the flat beam is
+pressed at gap 0).
 """
 
 from __future__ import annotations
@@ -290,8 +290,9 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
     out : list of Equilibrium
         The search's equilibria.
     S : float
-        The searched square's size (no second search where ``R`` is not below it,
-        nor below half the admissible box's largest side).
+        The searched square's size (no second search where ``R`` is not below
+        ``NEAR_FLAT`` of it and of half the admissible box's largest side; with
+        two modes and the flat beam pressed, below them).
     lo, hi : ndarray
         The admissible amplitudes' box.
     search : callable
@@ -304,13 +305,13 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
     """
     if dp.contact != "obstacle":
         return out
-    if any(e.stable and e.status == "optimal" and not np.any(e.w) for e in out) and modes.k == 2:
-        R, reach = OWN_BOX * peak_amplitude(dp, modes), 1.0
+    if modes.k == 2 and any(e.stable and e.status == "optimal" and not np.any(e.w) for e in out):
+        R, below = OWN_BOX * peak_amplitude(dp, modes), 1.0
     else:
-        R, reach = OWN_BOX * own_size(dp, modes), NEAR_FLAT
+        R, below = OWN_BOX * own_size(dp, modes), NEAR_FLAT
     # (not where the square would span the admissible box: a narrow channel, whose
     # search is already measured in its width, scales.rescale_for)
-    if not (math.isfinite(R) and 0.0 < R < reach * min(S, 0.5 * float(np.max(hi - lo)))):
+    if not (math.isfinite(R) and 0.0 < R < below * min(S, 0.5 * float(np.max(hi - lo)))):
         return out
     found = search(dp.rescaled(dp.W * R))
     edge = 1.0 - 1e-6
