@@ -4,9 +4,10 @@ gaocvx.nonconvex.equilibria miss a stable equilibrium near the flat beam?
 
 Each scene (a seeded draw): the thesis's beam (1 m, h = 0.2 m, E = 2.1e11 Pa,
 nu = 0.3) on supports P1-P4, 4-10 elements, an obstacle 10^U(-15, -12.5) m
-below, a uniform load q = -10^U(-7, -1) N/m or one point force of that size
-at x in [0.1, 0.9] m, and P = U(1.02, 1.9) P_bar_h; scenes with other than one
-unstable mode (by the independent energy) are skipped.
+below (``--bed``: a unilateral bed there), a uniform load q = -10^U(-7, -1) N/m
+or one point force of that size at x in [0.1, 0.9] m, and P = U(1.02, 1.9)
+P_bar_h (``--modes 2``: U(2, 6)); scenes with other than ``--modes`` unstable
+modes (by the independent energy) are skipped.
 
 * ``equilibria(scene)`` is run and timed (the library from ``--src``);
 * the independent energy (tests/nonconvex_independent.py::Discrete, in units of
@@ -26,6 +27,7 @@ Usage (from the repository's root)::
     OMP_NUM_THREADS=1 python benchmarks/small_gap_campaign.py --seed 1 --count 60 --out /tmp/sg
     OMP_NUM_THREADS=1 python benchmarks/small_gap_campaign.py --seed 1 --count 60 --out /tmp/sg0 \\
         --src /path/to/another/tree
+    OMP_NUM_THREADS=1 python benchmarks/small_gap_campaign.py --modes 2 --seed 32 --count 24 --out /tmp/sg2
 
 The numbers in docs/nonconvex-campaign.md come from such runs.
 """
@@ -51,6 +53,10 @@ ap.add_argument("--out", required=True, help="output directory")
 ap.add_argument("--seed", type=int, default=1)
 ap.add_argument("--count", type=int, default=60, help="scenes drawn")
 ap.add_argument("--starts", type=int, default=40, help="independent local minimisations per scene")
+ap.add_argument("--modes", type=int, default=1, choices=(1, 2),
+                help="unstable modes: P = U(1.02, 1.9) P_bar_h for one, U(2, 6) for two")
+ap.add_argument("--bed", action="store_true",
+                help="a unilateral bed (stiffness 10^U(9, 12) N/m^2) instead of the obstacle")
 args = ap.parse_args()
 sys.path[:0] = [args.src, args.tests]
 
@@ -72,15 +78,21 @@ def draw(rng) -> dict:
     else:
         load["points"] = [[float(rng.uniform(0.1, 0.9)), -float(10 ** rng.uniform(-7, -1))]]
     data = {"beam": {**BEAM, "supports": str(rng.choice(["P1", "P2", "P3", "P4"]))},
-            "load": {**load, "axial": 0.0}, "mesh": {"elements": int(rng.integers(4, 11))},
-            "obstacle": {"gap": float(10 ** rng.uniform(-15, -12.5))}}
+            "load": {**load, "axial": 0.0}, "mesh": {"elements": int(rng.integers(4, 11))}}
+    gap = float(10 ** rng.uniform(-15, -12.5))
+    if args.bed:
+        data["foundation"] = {"gap": gap, "stiffness": float(10 ** rng.uniform(9, 12))}
+    else:
+        data["obstacle"] = {"gap": gap}
     limit = DiscreteProblem(Scene.from_dict(data)).P_bar_h
-    data["load"]["axial"] = float(limit * rng.uniform(1.02, 1.9))
+    data["load"]["axial"] = float(limit * (rng.uniform(1.02, 1.9) if args.modes == 1
+                                           else rng.uniform(2.0, 6.0)))
     return data
 
 
 def near_flat_minima(en, rng, starts) -> list:
-    """The independent near-flat minima: nodal w [m] of each distinct stable KKT end."""
+    """The independent near-flat minima: nodal w [m] of each distinct stable KKT end
+    (on a bed, with every point clear of its edge: its stability is then known)."""
     minima = []
     for _ in range(starts):
         x, _, _ = en.local_min(rng.normal(size=en.n) * 10 ** rng.uniform(-1, 1.5), slsqp_iter=400)
@@ -88,6 +100,10 @@ def near_flat_minima(en, rng, starts) -> list:
         if (kkt["stationarity"] > 1e-7 or kkt["feasibility"] > 1e-10 or kkt["lowest"] <= 1e-9
                 or np.abs(x).max() > 1e4):
             continue
+        if args.bed:
+            depth = np.asarray(en.gql - en._local(x)[5], float)
+            if np.abs(depth).min() < 1e-6 * np.abs(depth).max():
+                continue
         if not any(np.abs(x - v).max() < 1e-5 * max(np.abs(x).max(), 1.0) for v in minima):
             minima.append(x)
     return [en.nodal_w(x) for x in minima]
@@ -103,9 +119,9 @@ def main() -> None:
         for i in range(args.count):
             data = draw(rng)
             scene = Scene.from_dict(data)
-            gap = data["obstacle"]["gap"]
+            gap = (data.get("obstacle") or data["foundation"])["gap"]
             en = Discrete(scene, W=gap)
-            if en.unstable_modes() != 1:
+            if en.unstable_modes() != args.modes:
                 continue
             t = time.perf_counter()
             eqs = equilibria(scene)
