@@ -144,19 +144,42 @@ def test_an_unpolished_entry_at_a_polished_ones_beam_gives_way():
     assert len(out) == len(first) + 1 and sum(e.whole_beam for e in out) == 1
 
 
-def _one_mode(monkeypatch):
+def _one_mode(monkeypatch, f=-2.0, rows=((1.0,), (-3.0,))):
     # H_0 = -4, f = -2: the peak at 1/2; the obstacle row u >= -3: the mode reaches
     # it at s = -3, so the near-flat scale is 3 and R = OWN_BOX 3
-    monkeypatch.setattr(node, "obstacle_rows",
-                        lambda dp: (np.array([[1.0]]), np.array([-3.0])))
-    return (NS(contact="obstacle", f=np.array([-2.0]), hessian=lambda u: sp.diags([-4.0]),
+    A, levels = np.array(rows[0])[:, None], np.array(rows[1])
+    monkeypatch.setattr(node, "obstacle_rows", lambda dp: (A, levels))
+    return (NS(contact="obstacle", f=np.array([f]), hessian=lambda u: sp.diags([-4.0]),
                W=3.0, rescaled=lambda W: NS(W=W)), NS(phi=np.eye(1), k=1))
 
 
-@pytest.mark.parametrize("S, searched", [(1.01 * OWN_BOX * 3.0 / NEAR_FLAT, True),
-                                         (0.99 * OWN_BOX * 3.0 / NEAR_FLAT, False)])
+@pytest.mark.parametrize("f, rows, hi, windows", [
+    # a channel: the floor's reach 3, the ceiling's 3e6 (u <= 3e6), beyond NEAR_FLAT
+    # of half the admissible range: the floor's scale alone
+    (-2.0, ((1.0, -1.0), (-3.0, -3e6)), 3e6, [OWN_BOX * 3.0]),
+    # the peak 5e3 far above the reach 3: both, the larger first
+    (-2e4, ((1.0,), (-3.0,)), 1e12, [OWN_BOX * 5e3, OWN_BOX * 3.0])])
+def test_each_scale_the_search_before_cannot_resolve_is_searched(monkeypatch, f, rows, hi,
+                                                                   windows):
+    dp, modes = _one_mode(monkeypatch, f, rows)
+    seen = []
+
+    def search(d):
+        seen.append(d.W)
+        return []
+    S = 1e12
+    own_scale(dp, modes, [_eq(True, [5.0, 1.0], [0.9 * hi])], S, np.full(1, -3.0),
+              np.full(1, hi), search)
+    assert seen == [pytest.approx(dp.W * R, rel=1e-15) for R in windows]
+
+
+@pytest.mark.parametrize("S, windows", [
+    (1.01 * OWN_BOX * 3.0 / NEAR_FLAT, [OWN_BOX * 3.0]),
+    # (the reach's square not below NEAR_FLAT of S: the peak's, 1/2, alone)
+    (0.99 * OWN_BOX * 3.0 / NEAR_FLAT, [OWN_BOX * 0.5]),
+    (0.99 * OWN_BOX * 0.5 / NEAR_FLAT, [])])
 def test_one_mode_is_searched_where_its_scale_lies_below_near_flat_of_the_range(
-        monkeypatch, S, searched):
+        monkeypatch, S, windows):
     # (without a flat beam listed: at a gap above 0 it is no equilibrium)
     dp, modes = _one_mode(monkeypatch)
     seen = []
@@ -166,7 +189,7 @@ def test_one_mode_is_searched_where_its_scale_lies_below_near_flat_of_the_range(
         return []
     out = [_eq(True, [5.0, 1.0], [0.9 * S])]
     own_scale(dp, modes, out, S, np.full(1, -S), np.full(1, S), search)
-    assert seen == ([pytest.approx(dp.W * OWN_BOX * 3.0, rel=1e-15)] if searched else [])
+    assert seen == [pytest.approx(dp.W * R, rel=1e-15) for R in windows]
 
 
 @pytest.mark.parametrize("resolved", [True, False])
@@ -184,8 +207,12 @@ def test_an_entry_not_optimal_gives_way_within_merge_S_where_every_find_is_optim
                 _eq(False, [1e-3, 0.0], [0.05], "optimal" if resolved else "inaccurate",
                     W=d.W)]
     first = [_eq(True, [5.0, 1.0], [0.9 * S]),
-             _eq(False, [-1e-3, 0.0], [-0.35 * R], "inaccurate")]
+             _eq(False, [-1e-3, 0.0], [-0.35 * R], "inaccurate"),
+             # (outside the square, which the second search did not look at: stays)
+             _eq(False, [-1e-3, 0.0], [-1.5 * R], "inaccurate")]
+    assert 1.5 * R < MERGE * S
     out = own_scale(dp, modes, first, S, np.full(1, -S), np.full(1, S), search)
     ids = [id(e) for e in out]
     assert (id(first[1]) in ids) is not resolved
+    assert id(first[2]) in ids
     assert sum(e.stable and e.amplitudes == pytest.approx([-0.25 * R]) for e in out) == 1

@@ -323,13 +323,13 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                 p, polish_d = program(d), polisher(d, modes)
                 a, b = (float(v[0]) for v in admissible(p))
                 a, b = max(-1.0, a), min(1.0, b)
-                found, own["complete"] = line.find_line(
+                found, proven = line.find_line(
                     d, p, 1.0, np.linspace(a, b, grid), grid, a, b, scene_energy(d, modes),
                     float(modes.c[0]), polish_d, dtol=dtol, probe_tol=probe_tol,
                     zero_floor=zero_floor(d))
-                if None in found:
-                    own["complete"] = False
-                    found = [f for f in found if f is not None]
+                # (every square searched: the proof holds where each one's does)
+                own["complete"] = own.get("complete", True) and bool(proven) and None not in found
+                found = [f for f in found if f is not None]
                 check_contact(d, p, found, polish_d, 1.0)
                 return settle(d, polish_d, found, 1.0, modes)
 

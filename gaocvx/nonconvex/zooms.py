@@ -33,7 +33,7 @@ from scipy.sparse.csgraph import connected_components
 from .equilibrium import MERGE, same_point
 from .whole_beam import same_beam
 
-__all__ = ["near_flat", "clusters", "own_scale", "own_size", "peak_amplitude", "NEAR_FLAT",
+__all__ = ["near_flat", "clusters", "own_scale", "own_sizes", "peak_amplitude", "NEAR_FLAT",
            "CLUSTER_STEPS", "CLUSTER_GRID", "MAX_CLUSTERS", "OWN_BOX", "SAME_BEAM"]
 
 log = logging.getLogger(__name__)
@@ -218,8 +218,8 @@ def peak_amplitude(dp, modes) -> float:
     return max(peaks, default=math.nan)
 
 
-def own_size(dp, modes, rows=None, peak=None) -> float:
-    """The near-flat equilibria's amplitude scale on an obstacle: the largest of
+def own_sizes(dp, modes, rows=None, peak=None) -> list:
+    """The near-flat equilibria's amplitude scales on an obstacle, largest first:
     :func:`peak_amplitude` and the amplitudes at which each unstable mode alone
     first reaches a surface of the obstacle, either way.
 
@@ -227,7 +227,8 @@ def own_size(dp, modes, rows=None, peak=None) -> float:
     gap below, the beam has a stable equilibrium about one gap deep, besides the
     free beam's linear answer near the peak (campaign: P4, 4 elements, gap
     9.6e-15 m, q = -4.6e-6 N/m: the pressed minimum at 1.0 and the saddle at 1.15
-    times the mode's reach).
+    times the mode's reach).  In a channel the ceiling's reach is a scale of its
+    own, and so is the peak where the load lifts the beam far more than a gap.
 
     ``rows``: the obstacle's rows and levels (:func:`.node.obstacle_rows`'s, by
     default).  A mode ``(1, 0)`` under the rows ``u_1 >= -3`` and
@@ -236,8 +237,8 @@ def own_size(dp, modes, rows=None, peak=None) -> float:
     >>> import numpy as np
     >>> from types import SimpleNamespace
     >>> rows = (np.array([[1.0, 0.0], [-1.0, -1.0]]), np.array([-3.0, -2.0]))
-    >>> own_size(None, SimpleNamespace(phi=np.array([[1.0], [0.0]])), rows, peak=np.nan)
-    3.0
+    >>> own_sizes(None, SimpleNamespace(phi=np.array([[1.0], [0.0]])), rows, peak=np.nan)
+    [3.0, 2.0]
     """
     if rows is None:
         from .node import obstacle_rows
@@ -249,19 +250,35 @@ def own_size(dp, modes, rows=None, peak=None) -> float:
             out = reach < 0.0
             if np.any(out):
                 sizes.append(float(np.min(levels[out] / reach[out])))
-    sizes = [x for x in sizes if math.isfinite(x)]
-    return max(sizes, default=math.nan)
+    return sorted((x for x in sizes if math.isfinite(x) and x > 0.0), reverse=True)
+
+
+def _windows(dp, modes, out, S, limit) -> list:
+    """The second searches' sizes R, largest first (:func:`own_scale`)."""
+    if modes.k == 2 and any(e.stable and e.status == "optimal" and not np.any(e.w)
+                            for e in out):
+        R = OWN_BOX * peak_amplitude(dp, modes)
+        return [R] if math.isfinite(R) and 0.0 < R < limit else []
+    windows = []
+    for size in own_sizes(dp, modes):
+        # (each a scale the search before cannot resolve: below NEAR_FLAT of it)
+        if OWN_BOX * size < NEAR_FLAT * (windows[-1] if windows else limit):
+            windows.append(OWN_BOX * size)
+    return windows
 
 
 def own_scale(dp, modes, out, S, lo, hi, search) -> list:
     """The flat beam's neighbourhood searched again in a problem of its own scale.
 
-    Wherever ``R = OWN_BOX`` times :func:`own_size` lies below ``NEAR_FLAT`` of
-    the amplitude range ``S`` (and of the admissible range), the equilibria near
-    the flat beam lie closer together than the first search resolves (campaign,
-    one mode: a stable beam pressed one gap deep, 1e-14 m, was missing from lists
-    called complete, within the merging distance of the saddle beside it; two
-    modes: such beams missing from lists of one entry, not complete).
+    Wherever ``R = OWN_BOX`` times one of :func:`own_sizes` lies below
+    ``NEAR_FLAT`` of the amplitude range ``S`` (and of half the admissible
+    range), the equilibria near the flat beam lie closer together than the first
+    search resolves (campaign, one mode: a stable beam pressed one gap deep,
+    1e-14 m, was missing from lists called complete, within the merging distance
+    of the saddle beside it; two modes: such beams missing from lists of one
+    entry, not complete).  The largest such ``R`` is searched first, and each
+    smaller size below ``NEAR_FLAT`` of the last one searched again (the floor's
+    reach in a channel whose ceiling's is far larger, a gap far below the peak).
     With two modes, where ``out`` lists the flat beam as a stable ``optimal``
     equilibrium (pressed at gap 0), R is measured by :func:`peak_amplitude` alone
     and compared with ``S``: its neighbourhood holds the saddles between it and the buckled
@@ -279,9 +296,10 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
     square where the admissible amplitudes go on (minima there are the
     square's), are listed in ``dp``'s units unless one is there already (within
     ``MERGE R``); an entry of ``out`` there that is not ``optimal`` gives way
-    (within ``MERGE S``, where every beam the second search found is
-    ``optimal``: it stood for them), and so does one not polished on the whole
-    beam within ``SAME_BEAM`` of one that is (deflection and slope, relative).
+    (within ``MERGE R``; within ``MERGE S`` where it lies inside the square and
+    every beam the second search found is ``optimal``: it stood for them), and so
+    does one not polished on the whole beam within ``SAME_BEAM`` of one that is
+    (deflection and slope, relative).
 
     Parameters
     ----------
@@ -292,7 +310,8 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
     S : float
         The searched square's size (no second search where ``R`` is not below
         ``NEAR_FLAT`` of it and of half the admissible box's largest side; with
-        two modes and the flat beam pressed, below them).
+        two modes and the flat beam pressed, below them).  A second search in a
+        smaller square takes the one before as its ``S``.
     lo, hi : ndarray
         The admissible amplitudes' box.
     search : callable
@@ -305,14 +324,16 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
     """
     if dp.contact != "obstacle":
         return out
-    if modes.k == 2 and any(e.stable and e.status == "optimal" and not np.any(e.w) for e in out):
-        R, below = OWN_BOX * peak_amplitude(dp, modes), 1.0
-    else:
-        R, below = OWN_BOX * own_size(dp, modes), NEAR_FLAT
     # (not where the square would span the admissible box: a narrow channel, whose
     # search is already measured in its width, scales.rescale_for)
-    if not (math.isfinite(R) and 0.0 < R < below * min(S, 0.5 * float(np.max(hi - lo)))):
-        return out
+    for R in _windows(dp, modes, out, S, min(S, 0.5 * float(np.max(hi - lo)))):
+        out = _own_scale(dp, modes, out, S, lo, hi, search, R)
+        S = R
+    return out
+
+
+def _own_scale(dp, modes, out, S, lo, hi, search, R) -> list:
+    """:func:`own_scale` in one square of size ``R``, after a search of size ``S``."""
     found = search(dp.rescaled(dp.W * R))
     edge = 1.0 - 1e-6
     added = []
@@ -329,8 +350,11 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
     # first that is not `optimal` stood for what lies within its merging distance:
     # one mode, a beam pressed one gap deep listed 2e-4 R off, unstable, no KKT point)
     clean = all(f.status == "optimal" for f in found if np.any(f.w))
-    kept = [e for e in out if e.status == "optimal" or not any(
-        same_point(e.amplitudes, f.amplitudes, S if clean else R) for f in added)]
+
+    def stood_for(e):
+        near = S if clean and float(np.max(np.abs(e.amplitudes))) <= R else R
+        return any(same_point(e.amplitudes, f.amplitudes, near) for f in added)
+    kept = [e for e in out if e.status == "optimal" or not stood_for(e)]
     merged = _one_beam(kept + added, R)
     log.info("equilibria (k = %d): near the flat beam searched again in its own scale "
              "(%.3g S): %d more, %d replaced", modes.k, R / S, len(merged) - len(kept),
