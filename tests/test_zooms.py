@@ -216,3 +216,21 @@ def test_an_entry_not_optimal_gives_way_within_merge_S_where_every_find_is_optim
     assert (id(first[1]) in ids) is not resolved
     assert id(first[2]) in ids
     assert sum(e.stable and e.amplitudes == pytest.approx([-0.25 * R]) for e in out) == 1
+
+
+@pytest.mark.parametrize("f", [-2e4, -2.0])
+def test_an_entry_gives_way_within_the_first_searchs_distance_in_every_square(monkeypatch, f):
+    # (a review's mock) the floor's square R = 12 finds the pressed beam at -3; the
+    # first search's `inaccurate` entry 0.1 from it, within MERGE S, gives way
+    # whether or not the peak's square (5e3 for f = -2e4) was searched before
+    dp, modes = _one_mode(monkeypatch, f)
+    S, floor = 1e12, OWN_BOX * 3.0
+
+    def search(d):
+        return [_eq(True, [-1e-3, 0.0], [-0.25], W=d.W)] if d.W == pytest.approx(
+            dp.W * floor, rel=1e-12) else []
+    first = [_eq(True, [5.0, 1.0], [0.9 * S]), _eq(False, [-1e-3, 0.0], [-2.9], "inaccurate")]
+    out = own_scale(dp, modes, first, S, np.full(1, -3.0), np.full(1, S), search)
+    assert id(first[1]) not in [id(e) for e in out]
+    assert [e.amplitudes for e in out if e.stable and e.amplitudes[0] < 0] == [
+        pytest.approx([-3.0])]

@@ -327,11 +327,17 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                     d, p, 1.0, np.linspace(a, b, grid), grid, a, b, scene_energy(d, modes),
                     float(modes.c[0]), polish_d, dtol=dtol, probe_tol=probe_tol,
                     zero_floor=zero_floor(d))
-                # (every square searched: the proof holds where each one's does)
-                own["complete"] = own.get("complete", True) and bool(proven) and None not in found
+                failed = None in found
                 found = [f for f in found if f is not None]
                 check_contact(d, p, found, polish_d, 1.0)
-                return settle(d, polish_d, found, 1.0, modes)
+                found = settle(d, polish_d, found, 1.0, modes)
+                # (every square searched: the proof holds where each one's does, and
+                # where every beam it found is `optimal` -- own_scale lists only those:
+                # a review's mock, the beam pressed onto the obstacle found
+                # `inaccurate` and nothing listed there, came out `complete`)
+                own["complete"] = (own.get("complete", True) and bool(proven) and not failed
+                                   and all(f.status == "optimal" for f in found if np.any(f.w)))
+                return found
 
             # the flat beam's neighbourhood again, in its own scale (:mod:`.zooms`);
             # the list's proof holds there only where that search's does too

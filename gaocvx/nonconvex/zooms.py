@@ -310,8 +310,8 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
     S : float
         The searched square's size (no second search where ``R`` is not below
         ``NEAR_FLAT`` of it and of half the admissible box's largest side; with
-        two modes and the flat beam pressed, below them).  A second search in a
-        smaller square takes the one before as its ``S``.
+        two modes and the flat beam pressed, below them).  A search in a smaller
+        square still lets the first search's entries give way within ``MERGE S``.
     lo, hi : ndarray
         The admissible amplitudes' box.
     search : callable
@@ -326,14 +326,15 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
         return out
     # (not where the square would span the admissible box: a narrow channel, whose
     # search is already measured in its width, scales.rescale_for)
+    # (each square after the first search's S: the entries that give way are that
+    # search's, and stood for what lies within its merging distance)
     for R in _windows(dp, modes, out, S, min(S, 0.5 * float(np.max(hi - lo)))):
         out = _own_scale(dp, modes, out, S, lo, hi, search, R)
-        S = R
     return out
 
 
 def _own_scale(dp, modes, out, S, lo, hi, search, R) -> list:
-    """:func:`own_scale` in one square of size ``R``, after a search of size ``S``."""
+    """:func:`own_scale` in one square of size ``R`` (``S``: the first search's)."""
     found = search(dp.rescaled(dp.W * R))
     edge = 1.0 - 1e-6
     added = []
