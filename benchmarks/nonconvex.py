@@ -16,7 +16,7 @@ for nonconvex.md's P4 example, the k = 2 P1 example and the P4 obstacle example
 (``--cases``) at 128 to 8192 elements (``--sizes``); ``modes``: four and five
 unstable modes (MODE_CASES) at 8 to 64 elements, with the node programs that
 ``solve_global`` picks (the fast path; no second try by the other kind), on
-their own and with basins off (``minimum.BASINS``), both in one run, four of them
+their own and with basins off (``search.BASINS``), both in one run, four of them
 free and two on a bonded bed; ``early``: the same scenes with a box to be split
 stopping early (``fast.EARLY``) and with its node problem solved to the end,
 in one run;
@@ -122,14 +122,14 @@ def table(out, cases=CASES, sizes=(8, 16, 32, 64, 128), fast=False):
 
 
 def _paired(out, cases, sizes, switch, header, row, module=None, values=(True, False)):
-    """Each scene solved with ``module.<switch>`` (``minimum`` by default) set to each of
+    """Each scene solved with ``module.<switch>`` (:mod:`gaocvx.nonconvex.search` by default) set to each of
     ``values`` (on, off) in one run, a row of each pair.
 
     ``row(label, n, on, off)`` formats a table row from the two :func:`_global` results.
     """
-    import gaocvx.nonconvex.minimum as minimum
+    import gaocvx.nonconvex.search as search
 
-    module = minimum if module is None else module
+    module = search if module is None else module
 
     def run(s, value):
         setattr(module, switch, value)

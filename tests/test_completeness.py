@@ -114,7 +114,7 @@ def test_the_proof_finds_what_three_samples_miss():
     from gaocvx.discrete import DiscreteProblem
     from gaocvx.nonconvex.bounds import equilibrium_box
     from gaocvx.nonconvex.fast import FastProgram
-    from gaocvx.nonconvex.minimum import rescale_for, scene_energy
+    from gaocvx.nonconvex.scales import rescale_for, scene_energy
     from gaocvx.nonconvex.modes import unstable_modes
     from gaocvx.nonconvex.stationary1 import find_line
 

@@ -125,7 +125,7 @@ def test_one_mode_slices_are_admissible_and_of_the_dc_form_across_the_range():
     stalled at a violation of 1.18e-6 of its size (forces of 7.7e5 in the
     program's units) and was taken as inadmissible, F = inf."""
     from gaocvx.nonconvex.fast_contact import FastContactProgram
-    from gaocvx.nonconvex.minimum import rescale_for, scene_energy
+    from gaocvx.nonconvex.scales import rescale_for, scene_energy
     from gaocvx.nonconvex.modes import unstable_modes
     from gaocvx.nonconvex.slices import ContactSlices
 

@@ -441,11 +441,11 @@ def test_branch_and_bound_time_limit_ends_uncertified(monkeypatch):
     """A branch and bound out of time stops and says so (inaccurate), never hangs
     (a Gao beam in a channel above P_bar ran for minutes in a new-user trial)."""
     import gaocvx.nonconvex.bnb as bnb
-    import gaocvx.nonconvex.minimum as minimum
+    import gaocvx.nonconvex.search as search
     from gaocvx import load_scene
     monkeypatch.setattr(bnb, "TIME_LIMIT", 0.0)
     # (the example is certified by the dual bound alone: that step is left out here)
-    monkeypatch.setattr(minimum, "DUAL_BOUND", False)
+    monkeypatch.setattr(search, "DUAL_BOUND", False)
     examples = Path(__file__).parent.parent / "examples"
     r = solve(load_scene(examples / "buckled_pinned.toml"), "global")
     assert r.status == "inaccurate" and "stopped at" in r.message
@@ -481,9 +481,10 @@ def test_uncertified_alternatives_are_not_called_minimisers(tmp_path, capsys, mo
     5.7e-9 m from w = 0 reported as five minimisers).  Here the mirror pair of an
     unloaded P4 beam, the search cut to 3 node programs."""
     import gaocvx.nonconvex.minimum as minimum
+    import gaocvx.nonconvex.search as search
 
     monkeypatch.setattr(minimum, "MAX_NODES", 3)
-    monkeypatch.setattr(minimum, "DUAL_BOUND", False)
+    monkeypatch.setattr(search, "DUAL_BOUND", False)
     d = scene_dict("P4", q=None, axial=1.3e9, elements=6)
     path = tmp_path / "cut_short.toml"
     beam = "\n".join(f"{k} = {json.dumps(v)}" for k, v in d["beam"].items())
@@ -568,16 +569,16 @@ def test_a_search_without_any_lower_bound_says_no_gap_is_certified(tmp_path, cap
     gap is certified; the status is `inaccurate` and the JSON stays valid."""
     import dataclasses
 
-    import gaocvx.nonconvex.minimum as minimum
+    import gaocvx.nonconvex.search as search
 
-    real = minimum.branch_and_bound
+    real = search.branch_and_bound
 
     def unbounded(*args, **kw):
         out = real(*args, **kw)
         return dataclasses.replace(out, lower=-math.inf, failed=out.nodes)
 
-    monkeypatch.setattr(minimum, "branch_and_bound", unbounded)
-    monkeypatch.setattr(minimum, "DUAL_BOUND", False)
+    monkeypatch.setattr(search, "branch_and_bound", unbounded)
+    monkeypatch.setattr(search, "DUAL_BOUND", False)
     path = tmp_path / "no_bound.toml"
     beam = "\n".join(f"{k} = {json.dumps(v)}" for k, v in scene_dict("P4")["beam"].items())
     path.write_text(f"[beam]\n{beam}\n[load]\nq = -1e7\naxial = 1.3e9\n[mesh]\nelements = 6\n")

@@ -15,7 +15,7 @@ import pytest
 import scipy.linalg as sla
 
 from gaocvx import DiscreteProblem, Scene, solve
-from gaocvx.nonconvex import minimum
+from gaocvx.nonconvex import search
 from gaocvx.nonconvex.basin import BasinProver, _Proof, basin
 from gaocvx.nonconvex.modes import unstable_modes
 from nonconvex_independent import Discrete
@@ -141,9 +141,9 @@ def test_an_obstacle_is_left_to_the_node_programs():
 @pytest.mark.parametrize("name", ["P1 k=2", "P2 bed"])
 def test_branch_and_bound_with_and_without_basins_agree(name, monkeypatch):
     sc = SCENES[name]
-    monkeypatch.setattr(minimum, "DUAL_BOUND", False)
+    monkeypatch.setattr(search, "DUAL_BOUND", False)
     with_basins = solve(sc, "global")
-    monkeypatch.setattr(minimum, "BASINS", False)
+    monkeypatch.setattr(search, "BASINS", False)
     without = solve(sc, "global")
     for r in (with_basins, without):
         assert r.status == "optimal", r.message

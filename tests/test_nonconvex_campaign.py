@@ -476,19 +476,19 @@ def test_a_search_stopped_as_stalled_whose_answer_is_within_its_units_goes_on(
     stall asked after two node programs and always answered yes, on a P4 beam
     above an obstacle whose answer is within its units."""
     from gaocvx.discrete import DiscreteProblem
-    from gaocvx.nonconvex import bnb, minimum
+    from gaocvx.nonconvex import bnb, minimum, search
     scene = Scene.from_dict({
         "beam": {"model": "gao", "supports": "P4", "length": 1.0, "E": 2.1e11, "nu": 0.3,
                  "half_thickness": 0.1, "width": 1.0},
         "load": {"q": -1e7, "axial": 1.3e9}, "mesh": {"elements": 16},
         "obstacle": {"gap": 0.01}})
     plain = solve(scene, "global")
-    real = minimum.branch_and_bound
+    real = search.branch_and_bound
 
     def forced(*args, stalled=None, **kw):
         return real(*args, stalled=None if stalled is None else (lambda u: True), **kw)
 
-    monkeypatch.setattr(minimum, "branch_and_bound", forced)
+    monkeypatch.setattr(search, "branch_and_bound", forced)
     monkeypatch.setattr(bnb, "STALL_NODES", 2)
     caplog.set_level(logging.INFO, logger="gaocvx.nonconvex")
     dp, raw, info = minimum.solve_global(DiscreteProblem(scene, check_convexity=False))

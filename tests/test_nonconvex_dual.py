@@ -14,7 +14,7 @@ from conftest import scene_dict
 from nonconvex_independent import Discrete
 
 from gaocvx import DiscreteProblem, Scene, solve
-from gaocvx.nonconvex import dual, minimum
+from gaocvx.nonconvex import dual, search
 from gaocvx.nonconvex.modes import unstable_modes
 
 
@@ -68,7 +68,7 @@ def test_dual_certificate_gives_the_branch_and_bounds_answer(monkeypatch):
     g = fast.extra["global"]
     assert fast.status == "optimal" and g["certificate"] == "dual bound" and g["nodes"] == 0
     assert g["unique"] is True and g["unstable_modes"] == 2
-    monkeypatch.setattr(minimum, "DUAL_BOUND", False)
+    monkeypatch.setattr(search, "DUAL_BOUND", False)
     ref = solve(scene, "global")
     r = ref.extra["global"]
     assert ref.status == "optimal" and r["certificate"] == "branch and bound" and r["nodes"] > 0

@@ -123,9 +123,10 @@ def test_an_uncertified_ground_truth_lends_no_other_minimiser(monkeypatch):
     other points are candidates, not minimisers: the result is measured against its
     answer alone, and the report says the ground truth was not certified."""
     import gaocvx.nonconvex.minimum as minimum
+    import gaocvx.nonconvex.search as search
 
     monkeypatch.setattr(minimum, "MAX_NODES", 3)
-    monkeypatch.setattr(minimum, "DUAL_BOUND", False)
+    monkeypatch.setattr(search, "DUAL_BOUND", False)
     scene = Scene.from_dict(scene_dict("P4", q=None, axial=1.3e9, elements=8))
     r = solve(scene, "global", elements=16)
     assert r.status == "inaccurate" and r.extra["global"]["alternatives"]

@@ -101,7 +101,7 @@ def test_the_saddle_near_the_flat_beam_from_a_perturbed_slice():
     from gaocvx import Scene
     from gaocvx.discrete import DiscreteProblem
     from gaocvx.nonconvex.fast_contact import FastContactProgram
-    from gaocvx.nonconvex.minimum import rescale_for, scene_energy
+    from gaocvx.nonconvex.scales import rescale_for, scene_energy
     from gaocvx.nonconvex.modes import unstable_modes
     from gaocvx.nonconvex.node import obstacle_rows
     from gaocvx.nonconvex.slices import ContactSlices

@@ -10,8 +10,9 @@ buckling modes (docs/nonconvex.md):
                bound), tried before the branch and bound
 ``node``       the convex node programs (dense CVXPY + Clarabel, DPP)
 ``bnb``        branch and bound with a certified gap
-``minimum``    the global minimiser, certified (``polish``: the answer
-               polished, its images)
+``minimum``    the global minimiser, certified: in which units a search runs,
+               and again (``search``: one search and its verdict;
+               ``polish``: the answer polished, its images)
 ``api``        ``solve(scene, "global")``'s results
 ``stationary`` every equilibrium for one unstable mode (zeros of F'(s));
                ``stationary2`` for two, ``slices`` F(s) with an obstacle

@@ -6,7 +6,7 @@ obstacle can absorb a load whose unsupported energy is 1e12 times anything the
 beam can do on it: a P4 beam at gap 0 under a point force of 6.04e12 N was
 answered flat, 0 J, `optimal`, its gap 8127 J (8.4e-12 of that floor), where a
 buckled minimum lies at -1891 J.  With an obstacle the gap must also resolve the
-energy measured here (:data:`.minimum.RESOLVE`), and the search is repeated in
+energy measured here (:data:`.search.RESOLVE`), and the search is repeated in
 the units of the beam on the obstacle where it does not
 (:func:`.scales.global_units`).
 """
