@@ -108,6 +108,32 @@ def test_its_finds_are_listed_in_the_problems_units():
     assert all(e.W == dp.W for e in added)       # (the finds came in d's, 6.0)
 
 
+@pytest.mark.parametrize("open_side", [True, False])
+def test_the_squares_own_minima_on_its_open_sides_do_not_keep_an_entry(monkeypatch, open_side):
+    # (a two-mode trial, P2 at 6 elements 6.4e-15 m above an obstacle: the second
+    # search found the four beams near the flat one `optimal` and two minima of the
+    # square on its sides, no KKT points, `inaccurate`; the first search's
+    # `inaccurate` flat beam stayed, and the list with it)  A side where the
+    # admissible amplitudes go on is the square's: the entry gives way; where they
+    # end there, the find is the problem's own and the entry stays
+    dp, modes = _problem()
+    monkeypatch.setattr(node, "obstacle_rows", lambda dp: (np.eye(2), np.full(2, -10.0)))
+    S = 1e8
+    R = OWN_BOX * 10.0
+    assert R < MERGE * S
+
+    def search(d):
+        return [_eq(True, [-1e-3, 0.0], [-0.09, -0.002], W=d.W),
+                _eq(True, [2e-3, 0.0], [1.0, 0.5], "inaccurate", W=d.W)]
+    first = [_eq(True, [5.0, 1.0], [400.0, 20.0], energy=-1.0),
+             _eq(True, [1e-3, 0.0], [0.0, 0.0], "inaccurate", energy=1.0)]
+    hi = np.full(2, S) if open_side else np.array([R, S])
+    out = own_scale(dp, modes, first, S, np.full(2, -S), hi, search)
+    assert (id(first[1]) in [id(e) for e in out]) is not open_side
+    assert [e.amplitudes for e in out if e.status == "optimal" and abs(e.amplitudes[0]) < R] == [
+        pytest.approx([-0.09 * R, -0.002 * R], rel=1e-15)]
+
+
 @pytest.mark.parametrize("S, side", [(1.5, 1.5),     # R = 2 beyond the square
                                      (100.0, 1.9)])  # beyond half the admissible box
 def test_not_searched_where_the_square_would_span_the_searched_one(S, side):

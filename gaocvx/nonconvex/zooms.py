@@ -297,7 +297,8 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
     square's), are listed in ``dp``'s units unless one is there already (within
     ``MERGE R``); an entry of ``out`` there that is not ``optimal`` gives way
     (within ``MERGE R``; within ``MERGE S`` where it lies inside the square and
-    every beam the second search found is ``optimal``: it stood for them), and so
+    every beam the second search found is ``optimal``, the square's own minima on
+    its open sides aside: it stood for them), and so
     does one not polished on the whole beam within ``SAME_BEAM`` of one that is
     (deflection and slope, relative).
 
@@ -337,20 +338,29 @@ def _own_scale(dp, modes, out, S, lo, hi, search, R) -> list:
     """:func:`own_scale` in one square of size ``R`` (``S``: the first search's)."""
     found = search(dp.rescaled(dp.W * R))
     edge = 1.0 - 1e-6
+
+    def the_squares(f):
+        # on a side of the square where the admissible amplitudes go on: a minimum
+        # of the square, no equilibrium (not a KKT point, so `inaccurate`)
+        s = np.asarray(f.amplitudes, float)
+        return bool(np.any((s <= -edge) & (lo < -R)) or np.any((s >= edge) & (hi > R)))
+    found = [f for f in found if np.any(f.w) and not the_squares(f)]
     added = []
     for f in found:
-        s = np.asarray(f.amplitudes, float)
-        if (f.status != "optimal" or not np.any(f.w)
-                or np.any((s <= -edge) & (lo < -R)) or np.any((s >= edge) & (hi > R))):
+        if f.status != "optimal":
             continue
+        s = np.asarray(f.amplitudes, float)
         f.amplitudes, f.W = [float(a) * R for a in s], float(dp.W)
         if not any(same_point(f.amplitudes, e.amplitudes, R)
                    for e in added + [e for e in out if e.status == "optimal"]):
             added.append(f)
     # (where the second search found every beam it lists accurately, an entry of the
     # first that is not `optimal` stood for what lies within its merging distance:
-    # one mode, a beam pressed one gap deep listed 2e-4 R off, unstable, no KKT point)
-    clean = all(f.status == "optimal" for f in found if np.any(f.w))
+    # one mode, a beam pressed one gap deep listed 2e-4 R off, unstable, no KKT point;
+    # the square's own minima on its open sides do not count: two modes, a trial's
+    # lists kept the first search's `inaccurate` flat beam beside the four beams
+    # found, for two such corners)
+    clean = all(f.status == "optimal" for f in found)
 
     def stood_for(e):
         near = S if clean and float(np.max(np.abs(e.amplitudes))) <= R else R
