@@ -54,6 +54,20 @@ def scene_energy(dp, modes) -> float:
     return load_constant(dp) + 0.5 * float(modes.c[0]) * A * A
 
 
+def square_energy(dp, modes) -> float:
+    """The energy scale of the square ``[-1, 1]^k`` of amplitudes in ``dp``'s units.
+
+    :func:`scene_energy` with the buckled amplitude 1: ``c0 + |c_1| / 2``.  A
+    second search in the flat beam's own scale (:func:`.zooms.own_scale`) measures
+    its slices' and zeros' accuracy against this, not against the scene's energy,
+    which there is that of the free beam buckled to thousands of the square's size
+    and more (a P4 beam in a channel 1e-6 m high, 9.6e-15 m above its floor: 1.5e22
+    in the square's units, against energies of 0.01 there; the slices took beams
+    2e-14 m through the floor as feasible).
+    """
+    return load_constant(dp) + 0.5 * abs(float(modes.c[0]))
+
+
 def global_units(dp, modes, linear):
     """:func:`rescale_for`, with an obstacle in the size of the beam on it
     (``linear``: :func:`.obstacle_scale.linear_on_obstacle`'s, None without).

@@ -181,7 +181,7 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
     """
     from .api import MAX_FAST_ELEMENTS, provably_convex
     from .minimum import MAX_ELEMENTS
-    from .scales import rescale_for, scene_energy
+    from .scales import rescale_for, scene_energy, square_energy
     from .modes import MAX_UNSTABLE, unstable_modes
     from .node import NodeProgram
 
@@ -224,11 +224,14 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                          f"mode load {float(modes.loads[2]):.4g} N)", dp.P)
     dp = rescale_for(dp, modes)
 
-    def program(dp):
+    def program(dp, floor=None):
+        # (floor: the energy the slices' accuracy is measured against, by default
+        # the scene's)
         if fast and obstacle:
             from .fast_contact import FastContactProgram
             from .slices import ContactSlices
-            return ContactSlices(FastContactProgram(dp, modes), scene_energy(dp, modes))
+            return ContactSlices(FastContactProgram(dp, modes),
+                                 scene_energy(dp, modes) if floor is None else floor)
         if fast:
             from .fast import FastProgram
             return FastProgram(dp, modes)
@@ -274,10 +277,11 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
 
         def own_search(d):
             # the square [-1, 1]^2 of d's units, within its admissible amplitudes
-            p = program(d)
+            # (accurate to the square's energy, not the scene's: scales.square_energy)
+            p = program(d, square_energy(d, modes))
             smin, smax = admissible(p)
             box = (np.maximum(-1.0, smin), np.minimum(1.0, smax))
-            found = find_plane(d, p, 1.0, floor=scene_energy(d, modes), modes=modes, box=box,
+            found = find_plane(d, p, 1.0, floor=square_energy(d, modes), modes=modes, box=box,
                                zoom=False)
             # (polished on the whole beam where that succeeds, as the first search's)
             return settle(d, polisher(d, modes), found, 1.0, modes)
@@ -320,11 +324,12 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
 
             def own_line(d):
                 # the segment [-1, 1] of d's units, within its admissible amplitudes
-                p, polish_d = program(d), polisher(d, modes)
+                # (accurate to the square's energy, not the scene's: scales.square_energy)
+                p, polish_d = program(d, square_energy(d, modes)), polisher(d, modes)
                 a, b = (float(v[0]) for v in admissible(p))
                 a, b = max(-1.0, a), min(1.0, b)
                 found, proven = line.find_line(
-                    d, p, 1.0, np.linspace(a, b, grid), grid, a, b, scene_energy(d, modes),
+                    d, p, 1.0, np.linspace(a, b, grid), grid, a, b, square_energy(d, modes),
                     float(modes.c[0]), polish_d, dtol=dtol, probe_tol=probe_tol,
                     zero_floor=zero_floor(d))
                 failed = None in found
