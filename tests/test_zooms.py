@@ -128,8 +128,11 @@ def test_the_squares_own_minima_on_its_open_sides_do_not_keep_an_entry(monkeypat
     first = [_eq(True, [5.0, 1.0], [400.0, 20.0], energy=-1.0),
              _eq(True, [1e-3, 0.0], [0.0, 0.0], "inaccurate", energy=1.0)]
     hi = np.full(2, S) if open_side else np.array([R, S])
-    out = own_scale(dp, modes, first, S, np.full(2, -S), hi, search)
+    verdicts = []
+    out = own_scale(dp, modes, first, S, np.full(2, -S), hi, search, verdicts)
     assert (id(first[1]) in [id(e) for e in out]) is not open_side
+    # (the list's proof holds only where each square's beams are all `optimal`)
+    assert verdicts == [open_side]
     assert [e.amplitudes for e in out if e.status == "optimal" and abs(e.amplitudes[0]) < R] == [
         pytest.approx([-0.09 * R, -0.002 * R], rel=1e-15)]
 

@@ -274,6 +274,7 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
                          starts=[np.asarray(e.amplitudes, float) for e in glob], box=(lo, hi),
                          minimisers=glob, proof=proof)
         complete = proof["complete"]
+        squares = []
 
         def own_search(d):
             # the square [-1, 1]^2 of d's units, within its admissible amplitudes
@@ -281,15 +282,21 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
             p = program(d, square_energy(d, modes))
             smin, smax = admissible(p)
             box = (np.maximum(-1.0, smin), np.minimum(1.0, smax))
+            own = {"dtol": dtol, "complete": None}
             found = find_plane(d, p, 1.0, floor=square_energy(d, modes), modes=modes, box=box,
-                               zoom=False)
+                               zoom=False, proof=own)
+            squares.append(bool(own["complete"]))
             # (polished on the whole beam where that succeeds, as the first search's)
             return settle(d, polisher(d, modes), found, 1.0, modes)
 
         if obstacle and None not in out:
-            # the flat beam's neighbourhood again, in its own scale (:mod:`.zooms`)
-            out = sorted(own_scale(dp, modes, out, S, lo, hi, own_search),
+            # the flat beam's neighbourhood again, in its own scale (:mod:`.zooms`);
+            # the list's proof holds there only where the square's does (its
+            # ellipses, :mod:`.completeness2`) and every beam it found is `optimal`
+            # (the first search's entries there may have given way to its finds)
+            out = sorted(own_scale(dp, modes, out, S, lo, hi, own_search, squares),
                          key=lambda e: e.energy)
+            complete = complete and all(squares)
     else:
         # finer grids where the one-mode estimate puts the buckled beam, when the
         # box is far wider (bounds.estimate_boxes), and, with an obstacle, where

@@ -267,7 +267,7 @@ def _windows(dp, modes, out, S, limit) -> list:
     return windows
 
 
-def own_scale(dp, modes, out, S, lo, hi, search) -> list:
+def own_scale(dp, modes, out, S, lo, hi, search, verdicts=None) -> list:
     """The flat beam's neighbourhood searched again in a problem of its own scale.
 
     Wherever ``R = OWN_BOX`` times one of :func:`own_sizes` lies below
@@ -317,6 +317,10 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
         The admissible amplitudes' box.
     search : callable
         ``search(dp_R) -> list of Equilibrium`` (amplitudes in ``dp_R``'s units).
+    verdicts : list, optional
+        Where given, each square searched appends whether every beam its search
+        found (the square's own minima aside) is ``optimal``: a list's proof holds
+        there only where it does.
 
     Returns
     -------
@@ -330,11 +334,11 @@ def own_scale(dp, modes, out, S, lo, hi, search) -> list:
     # (each square after the first search's S: the entries that give way are that
     # search's, and stood for what lies within its merging distance)
     for R in _windows(dp, modes, out, S, min(S, 0.5 * float(np.max(hi - lo)))):
-        out = _own_scale(dp, modes, out, S, lo, hi, search, R)
+        out = _own_scale(dp, modes, out, S, lo, hi, search, R, verdicts)
     return out
 
 
-def _own_scale(dp, modes, out, S, lo, hi, search, R) -> list:
+def _own_scale(dp, modes, out, S, lo, hi, search, R, verdicts=None) -> list:
     """:func:`own_scale` in one square of size ``R`` (``S``: the first search's)."""
     found = search(dp.rescaled(dp.W * R))
     edge = 1.0 - 1e-6
@@ -361,6 +365,8 @@ def _own_scale(dp, modes, out, S, lo, hi, search, R) -> list:
     # lists kept the first search's `inaccurate` flat beam beside the four beams
     # found, for two such corners)
     clean = all(f.status == "optimal" for f in found)
+    if verdicts is not None:
+        verdicts.append(clean)
 
     def stood_for(e):
         near = S if clean and float(np.max(np.abs(e.amplitudes))) <= R else R
