@@ -493,3 +493,24 @@ def test_in_a_channel_the_beam_pressed_onto_the_floor_is_listed():
               and np.max(np.abs(e.w - pressed[0])) <= 1e-6 * gap]
     assert len(listed) == 1
     assert all(e.status == "optimal" for e in eqs)
+
+
+@pytest.mark.slow
+def test_in_a_channel_a_few_gaps_high_every_minimum_is_listed():
+    # A review: P2 (two modes) in a channel 3e-14 m high, its floor 6.4e-15 m below.
+    # The search's S, the free beam's buckled amplitude, was 2.5e13 times the
+    # channel: its merging distance (1e-6 S) spanned the channel, and the list was
+    # one `inaccurate` entry, `complete`, three minima missing.  S is now bounded
+    # by the admissible amplitudes' box.
+    gap = 6.41708733070065e-15
+    scene = Scene.from_dict({"beam": {**BEAM, "supports": "P2"},
+                             "load": {"q": -2.712545132101729e-4, "axial": 11346141893.49611},
+                             "mesh": {"elements": 6},
+                             "obstacle": {"gap": gap, "gap_above": 3e-14}})
+    minima = _independent_minima(scene, gap)
+    assert len(minima) >= 3
+    eqs = equilibria(scene)
+    assert all(e.status == "optimal" for e in eqs)
+    for w, _ in minima:
+        assert sum(e.stable and np.max(np.abs(e.w - w)) <= 1e-6 * np.abs(w).max()
+                   for e in eqs) == 1

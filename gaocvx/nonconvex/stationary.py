@@ -259,6 +259,12 @@ def equilibria(scene, elements: int | None = None, seeds=(), grid: int = GRID,
         # construction).
         smin, smax = admissible(prog)
         lo, hi = np.maximum(lo, smin), np.minimum(hi, smax)
+        # Every equilibrium lies in the admissible box, so it bounds S too: the
+        # search's merging distance, differences and proof are fractions of S (a
+        # P2 beam in a channel 3e-14 m high: S 2.5e13 times the channel, its
+        # merging distance 2.5e7 times, and the list `complete` with one
+        # `inaccurate` entry and three minima missing -- a review)
+        S = min(S, float(np.max(np.abs(np.r_[lo, hi]))))
     dtol = (line.DENSE_DERIVATIVE_TOL if not fast else
             line.CONTACT_DERIVATIVE_TOL if obstacle else line.DERIVATIVE_TOL)
     # (the stability probes: the dense programs' accuracy; the Newton slices' F'
