@@ -28,7 +28,7 @@ log = logging.getLogger(__name__)
 
 # A node's answer may violate an obstacle by its solver's tolerance, which lowers
 # its energy by force x violation (measured: 3e-9 of it for a point contact): a
-# polished point is taken within this fraction of its energy (minimum.GAP_TOL).
+# polished point is taken within this fraction of its energy (search.GAP_TOL).
 SLACK = 1e-8
 
 
