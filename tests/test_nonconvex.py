@@ -368,6 +368,25 @@ def test_euler_bernoulli_above_its_limit_is_refused_with_the_reason(tmp_path, ca
     assert "unbounded below" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("gap, above, key", [(0.0, 1e-200, "obstacle.gap_above"),
+                                            (1e-200, 1e-210, "obstacle.gap")])
+def test_a_channel_too_narrow_for_floating_point_is_refused_naming_its_key(
+        tmp_path, capsys, gap, above, key):
+    # Measured in the channel's width (the search's units), the Gao coefficient
+    # E_alpha W^2 / EI underflows to 0 and the load f L^3 / (EI W) is 1e197, whose
+    # square overflows: the commands ended in "internal error" (ZeroDivisionError,
+    # OverflowError); such a scene is refused, its surface's key named, exit 2.
+    path = tmp_path / "tiny.toml"
+    path.write_text('[beam]\nmodel = "gao"\nsupports = "P4"\nlength = 1.0\nE = 2.1e11\n'
+                    'nu = 0.3\nhalf_thickness = 0.1\nwidth = 1.0\n[load]\nq = -1e7\n'
+                    f'axial = 1.3e9\n[obstacle]\ngap = {gap}\ngap_above = {above}\n'
+                    '[mesh]\nelements = 8\n')
+    for command in ("solve", "equilibria"):
+        assert main([command, str(path)]) == 2
+        err = capsys.readouterr().err
+        assert f"error: {key}: " in err and "too narrow" in err and "internal" not in err, err
+
+
 def test_cli_solves_above_the_limit(tmp_path, capsys):
     import json
     path = tmp_path / "p4.toml"

@@ -26,10 +26,17 @@ Examples
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 
+from ..errors import SceneError
 from .bounds import load_constant, mode_amplitudes
+
+# The search squares its non-dimensional numbers (an energy's square, a * w^4
+# with w near 1), so each must lie within the squares' range of doubles.
+_SMALLEST = math.sqrt(sys.float_info.min)     # 1.5e-154
+_LARGEST = math.sqrt(sys.float_info.max)      # 1.3e154
 
 __all__ = ["one_mode_amplitude", "scene_energy", "global_units", "rescale_for"]
 
@@ -110,7 +117,33 @@ def _in_size(dp, size, shrink=False):
     if dp.contact == "obstacle" and dp.g_above is not None:
         wall = max(float(np.max(np.abs(dp.g))), float(dp.g_above))
         if 0.0 < wall < 0.1 * max(size, 1.0):
-            return dp.rescaled(dp.W * wall)
+            return _in_channel(dp, wall)
     if math.isfinite(size) and (size > 1.0 or (shrink and 0.0 < size < 0.1)):
         return dp.rescaled(dp.W * size)
     return dp
+
+
+def _in_channel(dp, wall):
+    """``dp`` in units of its channel's wider surface's distance ``wall`` [W],
+    refused (:class:`.SceneError`, naming that surface's key) where those units
+    put a number the search squares outside the range of doubles' squares: a
+    ceiling 1e-200 m above a floor at gap 0 makes the Gao coefficient 0 and the
+    load 8e197 there (an energy's square overflows); at 1e-100 m the energy
+    unit is 1.4e-192 J."""
+    try:
+        new = dp.rescaled(dp.W * wall)
+        numbers = {"the energy unit": new.E0,
+                   "the Gao coefficient": new.a if dp.a else None,
+                   "the load": float(np.max(np.abs(new.f))) if np.any(dp.f) else None}
+        bad = [name for name, x in numbers.items()
+               if x is not None and not _SMALLEST <= abs(x) <= _LARGEST]
+    except FloatingPointError:
+        bad = ["the load"]
+    if not bad:
+        return new
+    key = "gap_above" if dp.g_above >= float(np.max(np.abs(dp.g))) else "gap"
+    raise SceneError(f"obstacle.{key}",
+                     f"a channel whose wider surface lies {wall * dp.W:.3g} m from the beam "
+                     f"is too narrow to be searched: in that distance's units {' and '.join(bad)} lie outside {_SMALLEST:.1e} to "
+                     f"{_LARGEST:.1e}, the range of floating point's squares",
+                     getattr(dp.scene.obstacle, key))
