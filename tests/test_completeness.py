@@ -10,6 +10,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -293,3 +294,24 @@ def test_solved_only_next_to_one_end_is_neither_proven_nor_an_optimal_edge(monke
         return
     assert all(e.complete is False for e in hurt)
     assert not any(e.status == "optimal" for e in hurt)
+
+
+def test_no_solved_slice_is_the_solvers_failure_not_the_scenes():
+    """w = 0 is always admissible (every surface lies at a gap >= 0), so a line
+    where no fixed-amplitude solve succeeds is a SolverError (exit 1), not bad
+    input: it was a SceneError naming "scene" (exit 2) -- a ceiling 1e-60 m above
+    a floor at gap 0 under q = -1e7 N/m, found by an extreme-scale trial."""
+    import math
+
+    from gaocvx.discrete import DiscreteProblem
+    from gaocvx.errors import SolverError
+    from gaocvx.nonconvex.stationary1 import find_line
+
+    class Failing:          # every slice failed: F = inf, F' = nan, not accurate
+        def reduced(self, s):
+            return math.inf, np.array([math.nan]), None, False
+
+    dp = DiscreteProblem(Scene.from_dict(scene_dict("P4", q=-1e7, axial=1.3e9, elements=8)),
+                         check_convexity=False)
+    with pytest.raises(SolverError, match="no fixed-amplitude solve"):
+        find_line(dp, Failing(), 1.0, np.array([]), 5, -1.0, 1.0, 1.0, -1.0)

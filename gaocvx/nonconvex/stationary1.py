@@ -20,7 +20,7 @@ import time
 
 import numpy as np
 
-from ..errors import SceneError
+from ..errors import SolverError
 from .completeness import proven_roots
 from .contours import sampled_roots
 from .equilibrium import Equilibrium, same_point
@@ -179,8 +179,11 @@ def find_line(dp, prog, S, seeds, grid, lo, hi, floor, c, polish=None,
     vals = sorted([(s, v) for s, v in [(s, dF(s)) for s in sampled] + extra
                    if math.isfinite(v[0])], key=lambda item: item[0])
     if not vals:
-        raise SceneError("scene", "no admissible amplitude of the buckling mode (no solve "
-                         "succeeded)")
+        # (w = 0 is admissible -- every surface lies at a gap >= 0 -- so this is the
+        # solves' failure, not the scene's: a ceiling 1e-60 m above a floor at gap 0
+        # under q = -1e7 N/m, a load of 8e57 in the channel's units)
+        raise SolverError("equilibria: no fixed-amplitude solve of the buckling mode "
+                          "succeeded", "solver_error")
     scale = max(max(abs(v[0]) for _, v in vals), 1e-300)
     # sign changes of F' and pairs of zeros between neighbouring grid points (a
     # local extremum of F' near zero: the test was once sign * F' < 0 at the
