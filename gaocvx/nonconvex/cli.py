@@ -50,7 +50,7 @@ def parse_range(text: str) -> np.ndarray:
     >>> parse_range("0:2e9:3").tolist()
     [0.0, 1000000000.0, 2000000000.0]
     """
-    from ..sweep import count_of
+    from ..ranges import count_of
 
     parts = str(text).split(":")
     try:
@@ -116,7 +116,7 @@ def _cmd_equilibria(args) -> int:
 
 def _cmd_path(args) -> int:
     from ..cli.common import _check_output, _dumps
-    from ..sweep import ProgressBar
+    from ..progress import ProgressBar
     from .path import equilibrium_path
 
     values = parse_range(args.axial)
