@@ -144,6 +144,7 @@ def _in_channel(dp, wall):
     key = "gap_above" if dp.g_above >= float(np.max(np.abs(dp.g))) else "gap"
     raise SceneError(f"obstacle.{key}",
                      f"a channel whose wider surface lies {wall * dp.W:.3g} m from the beam "
-                     f"is too narrow to be searched: in that distance's units {' and '.join(bad)} lie outside {_SMALLEST:.1e} to "
-                     f"{_LARGEST:.1e}, the range of floating point's squares",
+                     f"is too narrow to be searched: in that distance's units "
+                     f"{' and '.join(bad)} lie outside {_SMALLEST:.1e} to {_LARGEST:.1e}, "
+                     f"the range of floating point's squares",
                      getattr(dp.scene.obstacle, key))
