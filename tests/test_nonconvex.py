@@ -345,6 +345,34 @@ def test_channel_holds_the_buckled_beam_against_its_upper_surface():
     assert free.min["w"] < -0.05 and free.energy < r.energy
 
 
+@pytest.mark.parametrize("supports, fraction", [("P4", 1.5), ("P1", 1.5)])
+def test_in_a_channel_far_narrower_than_the_buckled_beam_the_flat_saddle_is_not_optimal(
+        supports, fraction):
+    # No load, a channel 1e-9 m above and below: the flat beam is a saddle and two
+    # mirror minima press it against either surface.  The gap was certified against
+    # the free beam's buckled energy (4e6 J for P4) that the channel cannot reach:
+    # w = 0 came out `optimal`, unique, gap 2.7e-9 J -- an extreme-scale trial.
+    from nonconvex_independent import Discrete
+
+    from conftest import compressed_scene
+
+    scene = compressed_scene(fraction, supports, q=0.0, elements=8)
+    scene = Scene.from_dict({**scene.to_dict(), "obstacle": {"gap": 1e-9, "gap_above": 1e-9}})
+    r = solve(scene)
+    assert r.method == "global" and r.status == "optimal", r.message
+    # independent: SLSQP on the independent energy from the beam against the floor
+    ind = Discrete(scene, 1e-9)
+    xs = np.linspace(0.0, 1.0, 9)
+    shape = np.sin(np.pi * xs) if supports == "P4" else np.sin(np.pi * xs) ** 2
+    slope = np.gradient(shape, xs)
+    x, e, _ = ind.local_min(ind.from_nodal(-0.9e-9 * shape, -0.9e-9 * slope))
+    lowest = e * ind.E0
+    assert lowest < -1e-10                       # below the flat beam's 0 J
+    assert r.energy <= lowest + 1e-8 * abs(lowest), (r.energy, lowest)
+    assert r.extra["global"]["unique"] is False   # its mirror image against the ceiling
+    assert max(abs(r.min["w"]), abs(r.max["w"])) == pytest.approx(1e-9, rel=1e-6)
+
+
 # --------------------------------------------------------------------- refusals
 def test_euler_bernoulli_above_its_limit_is_refused_with_the_reason(tmp_path, capsys):
     d = scene_dict("P4", model="euler-bernoulli", q=-1e7, axial=1.5e9, elements=8)

@@ -82,10 +82,11 @@ def linear_on_obstacle(dp) -> tuple[float, float] | None:
     return c0 * dp.E0, size * dp.W
 
 
-def obstacle_energy(dp, modes, linear) -> float | None:
+def obstacle_energy(dp, modes, linear, reach: float = float("inf")) -> float | None:
     """:func:`.scales.scene_energy` with the linear beam on the obstacle, in the
-    units of ``dp``: ``linear`` is :func:`linear_on_obstacle`'s (None: None)."""
+    units of ``dp``: ``linear`` is :func:`linear_on_obstacle`'s (None: None);
+    ``reach`` caps the amplitude (:func:`.scales.channel_reach`)."""
     if linear is None:
         return None
-    A = float(mode_amplitudes(dp, modes, 1)[0])
+    A = min(float(mode_amplitudes(dp, modes, 1)[0]), reach)
     return linear[0] / dp.E0 + 0.5 * float(modes.c[0]) * A * A

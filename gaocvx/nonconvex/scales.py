@@ -38,7 +38,8 @@ from .bounds import load_constant, mode_amplitudes
 _SMALLEST = math.sqrt(sys.float_info.min)     # 1.5e-154
 _LARGEST = math.sqrt(sys.float_info.max)      # 1.3e154
 
-__all__ = ["one_mode_amplitude", "scene_energy", "global_units", "rescale_for"]
+__all__ = ["one_mode_amplitude", "scene_energy", "channel_reach", "global_units",
+           "rescale_for"]
 
 
 def one_mode_amplitude(dp, modes) -> float:
@@ -46,7 +47,7 @@ def one_mode_amplitude(dp, modes) -> float:
     return float(mode_amplitudes(dp, modes, 1)[0])
 
 
-def scene_energy(dp, modes) -> float:
+def scene_energy(dp, modes, reach: float = math.inf) -> float:
     """The scene's own energy scale (non-dimensional, in the units of ``dp``).
 
     ``c0 + c_1 A^2 / 2``: ``c0 = f'K^-1 f / 2`` is minus the energy of the
@@ -55,10 +56,31 @@ def scene_energy(dp, modes) -> float:
     properties of the scene (load, beam, P), not of the answer; the node
     programs' accuracy is absolute in these units (Clarabel's 1e-12), so a gap
     can be certified relative to this energy, but not relative to an answer
-    whose own energy is zero.
+    whose own energy is zero.  ``reach``: the largest admissible ``|s_1|``
+    (:func:`channel_reach`), which caps ``A`` in a channel.
     """
-    A = one_mode_amplitude(dp, modes)
+    A = min(one_mode_amplitude(dp, modes), reach)
     return load_constant(dp) + 0.5 * float(modes.c[0]) * A * A
+
+
+def channel_reach(dp, prog) -> float:
+    """The largest ``|s_1|`` of an admissible beam: finite in a channel only.
+
+    The first mode's amplitude range over the obstacle's rows (a linear program
+    per side, :func:`.fast_check.amplitude_range`); ``inf`` without a second
+    surface or where a side is not bounded.  A channel far narrower than the free
+    beam's buckled amplitude holds every beam's energy far below
+    :func:`scene_energy`'s: a gap certified against that (P4, q = 0, a channel
+    1e-9 m above and below, 8 elements: the flat beam, a saddle, `optimal`, its
+    gap 2.7e-9 J against the scene's 4e6 J, where two minima lie at
+    -1.7e-9 J -- an extreme-scale trial) says nothing of the beams in it.
+    """
+    if dp.contact != "obstacle" or dp.g_above is None:
+        return math.inf
+    from .fast_check import amplitude_range
+
+    lo, hi = amplitude_range(prog)
+    return float(max(abs(lo[0]), abs(hi[0])))
 
 
 def square_energy(dp, modes) -> float:

@@ -27,7 +27,7 @@ from .bnb import branch_and_bound
 from .bounds import amplitude_box
 from .node import NodeProgram
 from .obstacle_scale import obstacle_energy
-from .scales import one_mode_amplitude, scene_energy
+from .scales import channel_reach, one_mode_amplitude, scene_energy
 from .polish import answer_certificate, feasible_energy, flat_answer, polish, search_best
 
 __all__ = ["run", "time_limit", "GAP_TOL", "GAP_TARGET"]
@@ -140,10 +140,12 @@ def run(dp, modes, max_nodes, t0, fast=False, prior=None, stalled=None, linear=N
     lo, hi = amplitude_box(dp, k, upper=start[0], lam1=lam1)
     # (with an obstacle, the energy of the linear beam on it: checked against the gap
     # below; the floor itself where the search runs in its units)
-    obstacle_floor = obstacle_energy(dp, modes, linear)
+    # (in a channel, of the beam buckled as far as the channel lets it: scales.channel_reach)
+    reach = channel_reach(dp, prog)
+    obstacle_floor = obstacle_energy(dp, modes, linear, reach)
     if obstacle_floor is not None:
         obstacle_floor *= ENERGY_FLOOR
-    floor = ENERGY_FLOOR * scene_energy(dp, modes)
+    floor = ENERGY_FLOOR * scene_energy(dp, modes, reach)
     if on_obstacle and obstacle_floor is not None:
         floor = obstacle_floor
     scale = max(dp.energy_size(start[1]), floor, 1e-300)
