@@ -37,6 +37,9 @@ from .bounds import load_constant, mode_amplitudes
 # with w near 1), so each must lie within the squares' range of doubles.
 _SMALLEST = math.sqrt(sys.float_info.min)     # 1.5e-154
 _LARGEST = math.sqrt(sys.float_info.max)      # 1.3e154
+# A channel admitting less than this fraction of the one-mode amplitude caps the
+# global search's energy scale (channel_reach).
+NARROW = 1e-2
 
 __all__ = ["one_mode_amplitude", "scene_energy", "channel_reach", "global_units",
            "rescale_for"]
@@ -63,8 +66,9 @@ def scene_energy(dp, modes, reach: float = math.inf) -> float:
     return load_constant(dp) + 0.5 * float(modes.c[0]) * A * A
 
 
-def channel_reach(dp, prog) -> float:
-    """The largest ``|s_1|`` of an admissible beam: finite in a channel only.
+def channel_reach(dp, prog, modes) -> float:
+    """The largest ``|s_1|`` of an admissible beam, in a channel that admits less
+    than NARROW of the one-mode amplitude; ``inf`` otherwise.
 
     The first mode's amplitude range over the obstacle's rows (a linear program
     per side, :func:`.fast_check.amplitude_range`); ``inf`` without a second
@@ -73,14 +77,21 @@ def channel_reach(dp, prog) -> float:
     :func:`scene_energy`'s: a gap certified against that (P4, q = 0, a channel
     1e-9 m above and below, 8 elements: the flat beam, a saddle, `optimal`, its
     gap 2.7e-9 J against the scene's 4e6 J, where two minima lie at
-    -1.7e-9 J -- an extreme-scale trial) says nothing of the beams in it.
+    -1.7e-9 J -- an extreme-scale trial) says nothing of the beams in it.  In a
+    wider channel the scene's energy is at most 1/NARROW^2 = 1e4 times the
+    buckled beam's in it, and a gap of GAP_TOL of it at most 1e-4 of that.
     """
     if dp.contact != "obstacle" or dp.g_above is None:
         return math.inf
     from .fast_check import amplitude_range
 
     lo, hi = amplitude_range(prog)
-    return float(max(abs(lo[0]), abs(hi[0])))
+    reach = float(max(abs(lo[0]), abs(hi[0])))
+    # (not in a wider one: a P1 beam in a channel of 0.083 of its amplitude, two
+    # modes, 256 elements, certified against the scene's energy to 2.8e-12 of it,
+    # was `inaccurate` against the channel's, its polished answer's certificate
+    # failing after a deeper search)
+    return reach if reach < NARROW * one_mode_amplitude(dp, modes) else math.inf
 
 
 def square_energy(dp, modes) -> float:

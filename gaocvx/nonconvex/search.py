@@ -141,7 +141,7 @@ def run(dp, modes, max_nodes, t0, fast=False, prior=None, stalled=None, linear=N
     # (with an obstacle, the energy of the linear beam on it: checked against the gap
     # below; the floor itself where the search runs in its units)
     # (in a channel, of the beam buckled as far as the channel lets it: scales.channel_reach)
-    reach = channel_reach(dp, prog)
+    reach = channel_reach(dp, prog, modes)
     obstacle_floor = obstacle_energy(dp, modes, linear, reach)
     if obstacle_floor is not None:
         obstacle_floor *= ENERGY_FLOOR
